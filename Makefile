@@ -1,0 +1,49 @@
+# snapmorph — `make` lists the targets. Every target sets up .venv by itself on first use.
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed-stamp
+JOBS   ?=
+
+.DEFAULT_GOAL := help
+.PHONY: help venv test test-fast bench maps maps-ci check-maps figures coverage clean
+
+help:  ## list the targets
+	@echo "snapmorph make targets:"
+	@grep -E '^[a-zA-Z_-]+:.*## ' $(MAKEFILE_LIST) | sed -E 's/:.*## /\t/' | awk -F'\t' '{printf "  %-12s %s\n", $$1, $$2}'
+
+$(STAMP): pyproject.toml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e ".[dev]"
+	@touch $(STAMP)
+
+venv: $(STAMP)  ## create .venv and install the project (done automatically by every target)
+
+test: $(STAMP)  ## run the whole test suite (slow tests included)
+	$(PY) -m pytest -q
+
+test-fast: $(STAMP)  ## run the tests not marked slow
+	$(PY) -m pytest -q -m "not slow"
+
+bench: $(STAMP)  ## print speed figures (solver, unit, pipeline)
+	$(PY) bench/run.py
+
+maps: $(STAMP)  ## build the full default design map (the main job) into maps/data/
+	$(PY) -m snapmorph maps build --grid default --out maps/data/default.nc $(if $(JOBS),--workers $(JOBS),)
+
+maps-ci: $(STAMP)  ## rebuild the small CI grid into maps/data/ci.nc
+	$(PY) -m snapmorph maps build --grid ci --out maps/data/ci.nc
+
+check-maps: $(STAMP)  ## recompute the CI grid and compare it with the committed snapshot
+	$(PY) -m snapmorph maps check --grid ci --against maps/data/ci.nc
+
+figures: $(STAMP)  ## write the paper's figures into figures/
+	$(PY) -m snapmorph figures --out figures
+
+coverage: $(STAMP)  ## run the fast tests as plain Python (NUMBA_DISABLE_JIT=1) under coverage
+	NUMBA_DISABLE_JIT=1 $(PY) -m pytest -q -m "not slow"
+
+clean:  ## remove caches (keeps .venv)
+	find . -name __pycache__ -type d -prune -exec rm -rf {} +
+	rm -rf .pytest_cache build *.egg-info

@@ -1,0 +1,3 @@
+from snapmorph.cli import main
+
+raise SystemExit(main())
