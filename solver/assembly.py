@@ -1,0 +1,133 @@
+"""Assembly of the global energy, gradient and reduced banded tangent stiffness.
+
+The element arrays travel together as one tuple ``elements``:
+
+``(stretch_nodes (ne, 2) int, stretch_params (ne, 2) [EA, rest length],
+   bend_nodes (nb, 3) int, bend_params (nb, 2) [EI / l_bar, kappa_bar],
+   spring_nodes (ns, 2) int, spring_params (ns, 3) [k, rest offset x, rest offset z])``
+
+Constraints enter through ``dof_map`` (the paper's constraint matrix W in index form): full
+DOF ``j = 2 node + c`` (c = 0 for x, 1 for z) maps to reduced DOF ``dof_map[j] >= 0``, or
+to ``-1`` when it is fixed or prescribed. Nodes that are tied or translate together share
+reduced DOFs, so ``K_red = W^T K W`` is assembled by scattering straight into the band.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from solver.energies import bending_terms, spring_terms, stretch_terms
+
+
+@njit(cache=True)
+def _scatter(nodes, dofs, nloc, g, h, band, grad_red, grad_full):
+    for a in range(nloc):
+        grad_full[2 * nodes[a >> 1] + (a & 1)] += g[a]
+        ra = dofs[a]
+        if ra < 0:
+            continue
+        grad_red[ra] += g[a]
+        for b in range(nloc):
+            rb = dofs[b]
+            if rb < 0 or rb > ra:
+                continue
+            band[ra - rb, rb] += h[a, b]
+
+
+def element_dofs(elements, dof_map):
+    """Reduced DOF of every local coordinate of every element: (stretch (ne, 4),
+    bend (nb, 6), spring (ns, 4)) int arrays, -1 where fixed. Computed once per system."""
+    out = []
+    for conn in (elements[0], elements[2], elements[4]):
+        full = (2 * conn[:, :, None] + np.arange(2)[None, None, :]).reshape(conn.shape[0], 2 * conn.shape[1])
+        out.append(np.ascontiguousarray(dof_map[full], dtype=np.int64))
+    return tuple(out)
+
+
+@njit(cache=True)
+def assemble_system(q, elements, dofs, band, grad_red, grad_full):
+    """Energy (J); writes the reduced band K, reduced gradient and full gradient (N).
+
+    ``q`` is the flat (2 n_nodes,) array of current positions in metres; ``dofs`` comes
+    from `element_dofs` for the system's DOF map.
+    """
+    stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
+    stretch_dofs, bend_dofs, spring_dofs = dofs
+    band[:, :] = 0.0
+    grad_red[:] = 0.0
+    grad_full[:] = 0.0
+    energy = 0.0
+    x4 = np.empty(4)
+    g4 = np.empty(4)
+    h4 = np.empty((4, 4))
+    for e in range(stretch_nodes.shape[0]):
+        nodes = stretch_nodes[e]
+        for a in range(2):
+            x4[2 * a] = q[2 * nodes[a]]
+            x4[2 * a + 1] = q[2 * nodes[a] + 1]
+        energy += stretch_terms(x4, stretch_params[e, 0], stretch_params[e, 1], g4, h4)
+        _scatter(nodes, stretch_dofs[e], 4, g4, h4, band, grad_red, grad_full)
+    x6 = np.empty(6)
+    g6 = np.empty(6)
+    h6 = np.empty((6, 6))
+    for e in range(bend_nodes.shape[0]):
+        nodes = bend_nodes[e]
+        for a in range(3):
+            x6[2 * a] = q[2 * nodes[a]]
+            x6[2 * a + 1] = q[2 * nodes[a] + 1]
+        energy += bending_terms(x6, bend_params[e, 0], bend_params[e, 1], g6, h6)
+        _scatter(nodes, bend_dofs[e], 6, g6, h6, band, grad_red, grad_full)
+    for e in range(spring_nodes.shape[0]):
+        nodes = spring_nodes[e]
+        for a in range(2):
+            x4[2 * a] = q[2 * nodes[a]]
+            x4[2 * a + 1] = q[2 * nodes[a] + 1]
+        energy += spring_terms(
+            x4, spring_params[e, 0], spring_params[e, 1], spring_params[e, 2], g4, h4
+        )
+        _scatter(nodes, spring_dofs[e], 4, g4, h4, band, grad_red, grad_full)
+    return energy
+
+
+@njit(cache=True)
+def total_energy(q, elements):
+    """Total elastic energy (J) of the positions ``q`` (no derivatives wanted)."""
+    stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
+    energy = 0.0
+    x4 = np.empty(4)
+    g4 = np.empty(4)
+    h4 = np.empty((4, 4))
+    for e in range(stretch_nodes.shape[0]):
+        nodes = stretch_nodes[e]
+        for a in range(2):
+            x4[2 * a] = q[2 * nodes[a]]
+            x4[2 * a + 1] = q[2 * nodes[a] + 1]
+        energy += stretch_terms(x4, stretch_params[e, 0], stretch_params[e, 1], g4, h4)
+    x6 = np.empty(6)
+    g6 = np.empty(6)
+    h6 = np.empty((6, 6))
+    for e in range(bend_nodes.shape[0]):
+        nodes = bend_nodes[e]
+        for a in range(3):
+            x6[2 * a] = q[2 * nodes[a]]
+            x6[2 * a + 1] = q[2 * nodes[a] + 1]
+        energy += bending_terms(x6, bend_params[e, 0], bend_params[e, 1], g6, h6)
+    for e in range(spring_nodes.shape[0]):
+        nodes = spring_nodes[e]
+        for a in range(2):
+            x4[2 * a] = q[2 * nodes[a]]
+            x4[2 * a + 1] = q[2 * nodes[a] + 1]
+        energy += spring_terms(
+            x4, spring_params[e, 0], spring_params[e, 1], spring_params[e, 2], g4, h4
+        )
+    return energy
+
+
+@njit(cache=True)
+def apply_increment(q, dof_map, du, scale):
+    """q[j] += scale * du[dof_map[j]] for every free full DOF (tied DOFs move together)."""
+    for j in range(q.shape[0]):
+        r = dof_map[j]
+        if r >= 0:
+            q[j] += scale * du[r]

@@ -1,0 +1,431 @@
+"""Path followers: Newton equilibrium, displacement control, and MGDC load control.
+
+MGDC is the modified generalised displacement control method (Yang & Shieh 1990; modified
+by Liu & Paulino 2017, the paper's choice). Each step starts from the tangent
+``u_P = K^-1 P`` with a load increment ``dlam = ± s / |u_P|`` — a fixed displacement norm
+``s`` per step, which is what GDC's stiffness parameter achieves — and the sign flips when
+consecutive tangents point apart (``u_P^{k-1} . u_P^k < 0``), which is how the method
+turns at limit points. Corrector iterations keep the increment orthogonal to the step's
+first tangent: ``dlam_j = -(u_P1 . u_R^j) / (u_P1 . u_P^j)``. The step size adapts to the
+number of iterations, as in Liu & Paulino's modification.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+# Newton has converged when the residual is below tol x the force scale, or when the last
+# correction moved no DOF by more than this fraction of the structure's size (the residual of
+# very stiff stretching terms cannot drop below round-off, positions can).
+TOL_DISP = 1e-11
+
+
+class ConvergenceError(RuntimeError):
+    """Newton iterations did not converge to an equilibrium."""
+
+
+@dataclass
+class Control:
+    """What is pushed: ``node`` (with every node sharing its displacement) along ``direction``."""
+
+    node: int
+    members: np.ndarray
+    direction: np.ndarray
+    distance: float
+    method: str
+    axis: int | None
+
+
+@dataclass
+class Path:
+    """An equilibrium path of a push. Arrays have one entry per converged step.
+
+    displacement: (K,) m, of the node along the direction, from 0;
+    force: (K,) N, applied to the node along the direction;
+    positions: (K, n_nodes, 2) m; status: "ok" or why the path stopped early;
+    negative_eigenvalues: (K,) of the tangent stiffness under the path's own control
+    (force control for "mgdc", the node's displacement held for "displacement");
+    negative_eigenvalues_displacement: (K,) the same with the pushed displacement held.
+    """
+
+    displacement: np.ndarray
+    force: np.ndarray
+    positions: np.ndarray
+    status: str
+    method: str
+    energy: np.ndarray
+    iterations: np.ndarray
+    negative_eigenvalues: np.ndarray
+    negative_eigenvalues_displacement: np.ndarray
+    info: dict = field(default_factory=dict)
+
+    @property
+    def stable(self) -> np.ndarray:
+        """(K,) bool: stable under the path's own control (no negative eigenvalue)."""
+        return self.negative_eigenvalues == 0
+
+    def __len__(self):
+        return len(self.displacement)
+
+
+# ---------------------------------------------------------------------- set-up
+def make_control(structure, node, direction, distance, method) -> Control:
+    """Validate a push request and describe it."""
+    node = structure._check_node(node)
+    if method not in ("mgdc", "displacement"):
+        raise ValueError(f"method must be 'mgdc' or 'displacement'; got {method!r}")
+    n = np.asarray(direction, dtype=float).reshape(-1)
+    if n.shape != (2,) or not np.all(np.isfinite(n)) or np.hypot(*n) == 0.0:
+        raise ValueError(f"direction must be a finite non-zero (x, z) pair; got {direction!r}")
+    n = n / np.hypot(*n)
+    if distance is None:
+        raise ValueError("distance (m) is required")
+    distance = float(distance)
+    if not np.isfinite(distance) or distance <= 0.0:
+        raise ValueError(f"distance must be finite and > 0 m; got {distance!r}")
+    rep = structure.supernodes()
+    members = np.flatnonzero(rep == rep[node])
+    fixed = structure.fixed_components(rep)[node]
+    for c, name in enumerate("xz"):
+        if fixed[c] and abs(n[c]) > 1e-12:
+            raise ValueError(
+                f"node {node} is fixed in {name}: it cannot be pushed along "
+                f"({n[0]:g}, {n[1]:g}); "
+                "push along a free direction or remove the support"
+            )
+    if fixed.all():
+        raise ValueError(f"node {node} is fixed in x and z: nothing to push")
+    axis = None
+    if method == "displacement":
+        axis_aligned = [c for c in range(2) if abs(abs(n[c]) - 1.0) < 1e-12]
+        if not axis_aligned:
+            raise ValueError(
+                "method='displacement' needs an axis-aligned direction such as (0, -1); "
+                "use method='mgdc' for an oblique push"
+            )
+        axis = axis_aligned[0]
+        n = np.round(n)
+    return Control(node, members, n, distance, method, axis)
+
+
+def _scales(structure):
+    X = structure.reference_positions
+    length = float(max(np.ptp(X[:, 0]), np.ptp(X[:, 1]), 1e-12))
+    EI = max(float(np.max(r.EI)) for r in structure.rods)
+    force = EI / length**2
+    return length, force
+
+
+def _load_vector(system, control):
+    P = np.zeros(system.n)
+    for c in range(2):
+        r = system.dof_map[2 * control.node + c]
+        if r >= 0:
+            P[r] = control.direction[c]
+    return P
+
+
+def _node_force(system, control):
+    g = system.grad_full.reshape(-1, 2)[control.members].sum(axis=0)
+    return float(control.direction @ g)
+
+
+def _node_displacement(q, X, control):
+    return float(control.direction @ (q.reshape(-1, 2)[control.node] - X[control.node]))
+
+
+class _Recorder:
+    def __init__(self):
+        self.rows = {k: [] for k in ("d", "F", "q", "E", "it", "neg", "negd")}
+
+    def add(self, d, F, q, E, it, neg, negd):
+        for k, v in zip(self.rows, (d, F, q.copy(), E, it, neg, negd)):
+            self.rows[k].append(v)
+
+    def path(self, n_nodes, status, method, info):
+        r = self.rows
+        return Path(
+            displacement=np.array(r["d"], dtype=float),
+            force=np.array(r["F"], dtype=float),
+            positions=np.array(r["q"], dtype=float).reshape(-1, n_nodes, 2),
+            status=status,
+            method=method,
+            energy=np.array(r["E"], dtype=float),
+            iterations=np.array(r["it"], dtype=np.int64),
+            negative_eigenvalues=np.array(r["neg"], dtype=np.int64),
+            negative_eigenvalues_displacement=np.array(r["negd"], dtype=np.int64),
+            info=info,
+        )
+
+
+# ---------------------------------------------------------------------- Newton
+def _newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move, prescribed=None):
+    """Newton at fixed load ``lam P``; q is updated in place.
+
+    Returns iterations used, or -1 when it failed. On success the system holds the
+    assembled and factorised state at the converged q.
+    """
+    du_max = np.inf
+    for it in range(max_iter + 1):
+        system.evaluate(q)
+        R = system.grad - lam * P if P is not None else system.grad
+        if not np.all(np.isfinite(R)):
+            return -1
+        ok = system.factor()
+        r_max = float(np.max(np.abs(R))) if R.size else 0.0
+        if r_max <= tol_force or du_max <= tol_disp:
+            return it if ok else -1
+        if not ok or it == max_iter:
+            return -1
+        du = system.solve(-R)
+        if not np.all(np.isfinite(du)):
+            return -1
+        du_max = float(np.max(np.abs(du)))
+        scale = min(1.0, max_move / du_max) if du_max > 0 else 1.0
+        system.increment(q, du, scale)
+    return -1
+
+
+def equilibrium(structure, positions, node, direction, force, tol=1e-9, max_iter=40):
+    """Newton from ``positions`` (n_nodes, 2) to the equilibrium under ``force`` (N) on
+    ``node`` along ``direction``. Raises ConvergenceError when it fails."""
+    q = structure._flat(positions).copy()
+    if not np.all(np.isfinite(q)):
+        raise ValueError("positions contain NaN or infinite values")
+    force = float(force)
+    if not np.isfinite(force):
+        raise ValueError(f"force must be finite (N); got {force!r}")
+    system = structure.reduced_system()
+    length, fscale = _scales(structure)
+    P = None
+    if node is not None:
+        control = make_control(structure, node, direction, 1.0, "mgdc")
+        P = _load_vector(system, control)
+    tol_force = tol * max(fscale, abs(force))
+    it = _newton(system, q, force, P, tol_force, TOL_DISP * length, max_iter, 0.25 * length)
+    if it < 0:
+        raise ConvergenceError(
+            f"equilibrium not found within {max_iter} Newton iterations from the given state"
+        )
+    info = {
+        "iterations": it,
+        "energy": system.energy,
+        "negative_eigenvalues": system.negative_eigenvalues,
+    }
+    return q.reshape(-1, 2), info
+
+
+# ---------------------------------------------------------------------- displacement control
+def follow_displacement(
+    structure,
+    control,
+    steps=100,
+    max_step=None,
+    min_step_ratio=1e-6,
+    tol=1e-9,
+    max_iter=25,
+    max_steps=20000,
+    stop=None,
+):
+    """Prescribe the node's displacement along an axis from 0 to ``control.distance``.
+
+    ``steps``: initial number of equal steps; steps are halved on failure and grow back
+    (up to ``max_step`` m) when Newton converges quickly. ``stop(path_arrays)`` may end
+    the path early (it receives the recorder's dict of lists).
+    """
+    X = structure.reference_positions
+    axis = control.axis
+    system = structure.reduced_system(extra_fixed=[(control.node, axis)])
+    length, fscale = _scales(structure)
+    q = X.reshape(-1).copy()
+    rec = _Recorder()
+    system.evaluate(q)
+    system.factor()
+    rec.add(0.0, 0.0, q, system.energy, 0, system.negative_eigenvalues, system.negative_eigenvalues)
+    dd0 = control.distance / max(int(steps), 1)
+    dd_max = dd0 if max_step is None else float(max_step)
+    dd = dd0
+    d = 0.0
+    q_prev, d_prev = None, 0.0
+    status = "ok"
+    sign = control.direction[axis]
+    t0 = time.perf_counter()
+    while d < control.distance * (1 - 1e-12):
+        if len(rec.rows["d"]) > max_steps:
+            status = f"stopped: more than {max_steps} steps"
+            break
+        step = min(dd, control.distance - d)
+        q_try = q.copy()
+        if q_prev is not None and d - d_prev > 0:
+            q_try += (q - q_prev) * (step / (d - d_prev))
+        target = d + step
+        for m in control.members:
+            q_try[2 * m + axis] = X[m, axis] + sign * target
+        fmax = max(fscale, abs(rec.rows["F"][-1]))
+        it = _newton(system, q_try, 0.0, None, tol * fmax, TOL_DISP * length, max_iter, 0.25 * length)
+        if it < 0:
+            dd = step / 2
+            if dd < min_step_ratio * dd0:
+                status = (
+                    f"not converged: displacement control failed near d = {d:.6g} m "
+                    "(step size underflow; a snap-back? use method='mgdc')"
+                )
+                break
+            continue
+        q_prev, d_prev = q, d
+        q, d = q_try, target
+        F = _node_force(system, control)
+        neg = system.negative_eigenvalues
+        rec.add(d, F, q, system.energy, it, neg, neg)
+        if it <= 3:
+            dd = min(1.5 * dd, dd_max)
+        if stop is not None and stop(rec.rows):
+            break
+    info = {"wall_time": time.perf_counter() - t0, "bandwidth": system.bandwidth, "n_dofs": system.n}
+    return rec.path(structure.n_nodes, status, "displacement", info)
+
+
+# ---------------------------------------------------------------------- MGDC
+def follow_mgdc(
+    structure,
+    control,
+    steps=100,
+    max_step=None,
+    tol=1e-9,
+    max_iter=12,
+    target_iterations=4,
+    max_steps=20000,
+    stop=None,
+    min_step_ratio=1e-7,
+):
+    """Load-controlled path with MGDC until the node's displacement reaches
+    ``control.distance``.
+
+    ``steps``: the first step moves the node by about distance / steps; later steps keep
+    the displacement norm per step between 1e-7 and ``max_step`` (m, default 2 x the first).
+    ``stop(path_arrays)`` may end the path early.
+    """
+    X = structure.reference_positions
+    system = structure.reduced_system()
+    length, fscale = _scales(structure)
+    tol_disp = TOL_DISP * length
+    P = _load_vector(system, control)
+    r_node = np.array([system.dof_map[2 * control.node + c] for c in range(2)])
+    n_free = np.where(r_node >= 0, control.direction, 0.0)
+    r_idx = np.where(r_node >= 0, r_node, 0)
+
+    def node_component(u):
+        return float(n_free @ u[r_idx])
+
+    q = X.reshape(-1).copy()
+    lam = 0.0
+    rec = _Recorder()
+    system.evaluate(q)
+    if not system.factor():
+        raise ValueError(
+            "the structure is not held against rigid-body motion under load control "
+            "(singular stiffness); add supports"
+        )
+    uP = system.solve(P)
+    rec.add(0.0, 0.0, q, system.energy, 0, system.negative_eigenvalues, system.negative_eigenvalues)
+    dd0 = control.distance / max(int(steps), 1)
+    flex = node_component(uP)
+    if not flex > 0:
+        raise ValueError("the pushed node does not move along the direction under load")
+    s = dd0 * np.linalg.norm(uP) / flex  # displacement norm of the first step
+    s0 = s
+    s_max = 2.0 * s0 if max_step is None else float(max_step)
+    sign = 1.0
+    uP_prev = None
+    status = "ok"
+    d = 0.0
+    rejected = 0
+    total_iterations = 0
+    t0 = time.perf_counter()
+    while d < control.distance:
+        if len(rec.rows["d"]) > max_steps:
+            status = f"stopped: more than {max_steps} steps"
+            break
+        if uP_prev is not None and float(uP_prev @ uP) < 0.0:
+            sign = -sign
+        uP1 = uP
+        converged = False
+        while not converged:
+            q_try = q.copy()
+            dlam = sign * s / np.linalg.norm(uP1)
+            lam_try = lam + dlam
+            system.increment(q_try, uP1, dlam)
+            fmax = max(fscale, abs(lam_try))
+            du_max = np.inf
+            for it in range(1, max_iter + 1):
+                system.evaluate(q_try)
+                R = system.grad - lam_try * P
+                if not np.all(np.isfinite(R)) or not system.factor():
+                    break
+                r_max = float(np.max(np.abs(R)))
+                if r_max <= tol * fmax or du_max <= tol_disp:
+                    converged = True
+                    break
+                both = system.solve(np.stack([P, -R], axis=1))
+                uPj, uRj = both[:, 0], both[:, 1]
+                denom = float(uP1 @ uPj)
+                if denom == 0.0 or not np.isfinite(denom):
+                    break
+                dl = -float(uP1 @ uRj) / denom
+                du = dl * uPj + uRj
+                if not np.all(np.isfinite(du)):
+                    break
+                du_max = float(np.max(np.abs(du)))
+                system.increment(q_try, du)
+                lam_try += dl
+                total_iterations += 1
+            # A corrector that wandered far from its predictor may have jumped to another
+            # branch: reject the step and retry with half the size.
+            if converged and np.linalg.norm(q_try - q) > 4.0 * s:
+                converged = False
+            if not converged:
+                rejected += 1
+                s *= 0.5
+                if s < min_step_ratio * s0:
+                    status = (
+                        f"not converged: MGDC step size underflow near d = {d:.6g} m, "
+                        f"F = {lam:.6g} N"
+                    )
+                    break
+                # restore the factorisation at the last converged state for the next try
+                system.evaluate(q)
+                system.factor()
+        if not converged:
+            break
+        # accepted: the system holds K at q_try
+        uP_prev = uP1
+        q, lam = q_try, lam_try
+        uP = system.solve(P)
+        d = _node_displacement(q, X, control)
+        neg = system.negative_eigenvalues
+        # Schur complement: dF/dd of the pushed node is 1 / (n . u_P); a negative one
+        # accounts for one negative eigenvalue that holding the displacement removes.
+        negd = neg - (1 if node_component(uP) < 0 else 0)
+        rec.add(d, lam, q, system.energy, it, neg, max(negd, 0))
+        if it <= target_iterations - 1:
+            s = min(1.5 * s, s_max)
+        elif it >= target_iterations + 3:
+            s *= 0.6
+        if stop is not None and stop(rec.rows):
+            break
+        if abs(d) > 10 * control.distance:
+            status = "stopped: the pushed node moved away from the target distance"
+            break
+    info = {
+        "wall_time": time.perf_counter() - t0,
+        "bandwidth": system.bandwidth,
+        "n_dofs": system.n,
+        "final_step_norm": s,
+        "rejected_steps": rejected,
+        "total_iterations": total_iterations,
+    }
+    return rec.path(structure.n_nodes, status, "mgdc", info)

@@ -1,0 +1,93 @@
+"""A constrained, assembled problem: the element arrays, one DOF map and its band storage.
+
+`ReducedSystem` is what the path followers work on: evaluate the energy, gradient and
+tangent stiffness at positions ``q``, factorise, and solve. It owns no physics of its own.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+from solver.assembly import apply_increment, assemble_system, element_dofs
+from solver.banded import band_to_dense, ldlt_factor, ldlt_solve
+
+# A pivot smaller than this times the largest diagonal entry means K is numerically singular
+# for LDL^T without pivoting; the dense pivoting fallback then takes over.
+PIVOT_TOL = 1e-13
+
+
+class ReducedSystem:
+    """K_red = W^T K W and the reduced gradient for one set of constraints.
+
+    ``dof_map`` (2 n_nodes,) maps full DOFs to reduced DOFs (-1 = fixed/prescribed).
+    """
+
+    def __init__(self, elements, dof_map, n_reduced, bandwidth):
+        self.elements = elements
+        self.dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
+        self.dofs = element_dofs(elements, self.dof_map)
+        self.n = int(n_reduced)
+        self.bandwidth = int(bandwidth)
+        self.band = np.zeros((self.bandwidth + 1, max(self.n, 1)))
+        self._band_copy = np.empty_like(self.band)
+        self.grad = np.zeros(max(self.n, 1))
+        self.grad_full = np.zeros(self.dof_map.shape[0])
+        self.energy = 0.0
+        self.negative_eigenvalues = 0
+        self.factor_ok = False
+        self._dense_lu = None
+
+    def evaluate(self, q):
+        """Assemble energy (J), gradients (N) and K (N/m) at positions ``q`` (m)."""
+        self.energy = assemble_system(
+            q, self.elements, self.dofs, self.band, self.grad, self.grad_full
+        )
+        return self.energy
+
+    def factor(self):
+        """Factorise the assembled K; records the number of negative eigenvalues.
+
+        Returns False when K is singular even for a pivoting solver.
+        """
+        self._band_copy[:, :] = self.band
+        status, negative, _ = ldlt_factor(self.band, PIVOT_TOL)
+        self._dense_lu = None
+        if status == 0:
+            self.negative_eigenvalues = int(negative)
+            self.factor_ok = True
+            return True
+        # Near a critical point LDL^T without pivoting may meet a tiny pivot: fall back to a
+        # dense symmetric-indefinite factorisation (rare; n is a few hundred).
+        dense = band_to_dense(self._band_copy)
+        if not np.all(np.isfinite(dense)):
+            self.factor_ok = False
+            return False
+        eig = np.linalg.eigvalsh(dense)
+        self.negative_eigenvalues = int(np.sum(eig < 0.0))
+        if np.min(np.abs(eig)) <= 1e-15 * np.max(np.abs(eig)):
+            self.factor_ok = False
+            return False
+        self._dense_lu = scipy.linalg.lu_factor(dense, check_finite=False)
+        self.factor_ok = True
+        return True
+
+    def solve(self, rhs):
+        """Solve K X = rhs for rhs (n,) or (n, m); returns a new array."""
+        b = np.array(rhs, dtype=float, copy=True)
+        one = b.ndim == 1
+        b2 = b.reshape(self.n, -1)
+        if self._dense_lu is not None:
+            out = scipy.linalg.lu_solve(self._dense_lu, b2, check_finite=False)
+        else:
+            out = ldlt_solve(self.band, np.ascontiguousarray(b2))
+        return out.ravel() if one else out
+
+    def increment(self, q, du, scale=1.0):
+        """Apply a reduced increment to the full positions in place."""
+        apply_increment(q, self.dof_map, du, scale)
+
+    def dense_stiffness(self, q):
+        """Dense reduced K at ``q`` (for tests and eigen-analysis)."""
+        self.evaluate(q)
+        return band_to_dense(self.band)
