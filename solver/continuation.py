@@ -3,9 +3,10 @@
 MGDC is the modified generalised displacement control method (Yang & Shieh 1990; modified
 by Liu & Paulino 2017, the paper's choice). Each step starts from the tangent
 ``u_P = K^-1 P`` with a load increment ``dlam = ± s / |u_P|`` — a fixed displacement norm
-``s`` per step, which is what GDC's stiffness parameter achieves — and the sign flips when
-consecutive tangents point apart (``u_P^{k-1} . u_P^k < 0``), which is how the method
-turns at limit points. Corrector iterations keep the increment orthogonal to the step's
+``s`` per step, which is what GDC's stiffness parameter achieves. GDC flips the sign when
+consecutive tangents point apart; here the predictor is oriented along the previous
+converged step instead (``sign(u_P . du_prev)``), which turns at limit points the same way
+but is not fooled when the tangent rotates fast in a very compliant structure. Corrector iterations keep the increment orthogonal to the step's
 first tangent: ``dlam_j = -(u_P1 . u_R^j) / (u_P1 . u_P^j)``. The step size adapts to the
 number of iterations, as in Liu & Paulino's modification.
 """
@@ -115,7 +116,7 @@ def make_control(structure, node, direction, distance, method) -> Control:
 def _scales(structure):
     X = structure.reference_positions
     length = float(max(np.ptp(X[:, 0]), np.ptp(X[:, 1]), 1e-12))
-    EI = max(float(np.max(r.EI)) for r in structure.rods)
+    EI = max(float(np.max(r.EI)) for r in structure.rods)  # N m^2
     force = EI / length**2
     return length, force
 
@@ -297,6 +298,7 @@ def follow_mgdc(
     max_step=None,
     tol=1e-9,
     max_iter=12,
+    max_accept_iter=8,
     target_iterations=4,
     max_steps=20000,
     stop=None,
@@ -305,8 +307,10 @@ def follow_mgdc(
     """Load-controlled path with MGDC until the node's displacement reaches
     ``control.distance``.
 
-    ``steps``: the first step moves the node by about distance / steps; later steps keep
-    the displacement norm per step between 1e-7 and ``max_step`` (m, default 2 x the first).
+    ``steps``: the first step moves the node by about distance / (4 steps); later steps
+    adapt to the iteration count, with a displacement norm per step up to ``max_step`` (m,
+    default 8 x the first's); a step that needs more than ``max_accept_iter`` iterations
+    is retried at half the size.
     ``stop(path_arrays)`` may end the path early.
     """
     X = structure.reference_positions
@@ -336,11 +340,13 @@ def follow_mgdc(
     flex = node_component(uP)
     if not flex > 0:
         raise ValueError("the pushed node does not move along the direction under load")
-    s = dd0 * np.linalg.norm(uP) / flex  # displacement norm of the first step
-    s0 = s
-    s_max = 2.0 * s0 if max_step is None else float(max_step)
+    # the first step moves the node by a quarter of distance / steps (the path may bend
+    # sharply at once); steps then grow up to four times that, i.e. about distance / steps
+    s0 = 0.25 * dd0 * np.linalg.norm(uP) / flex
+    s = s0
+    s_max = 8.0 * s0 if max_step is None else float(max_step)
     sign = 1.0
-    uP_prev = None
+    step_prev = None
     status = "ok"
     d = 0.0
     rejected = 0
@@ -350,8 +356,10 @@ def follow_mgdc(
         if len(rec.rows["d"]) > max_steps:
             status = f"stopped: more than {max_steps} steps"
             break
-        if uP_prev is not None and float(uP_prev @ uP) < 0.0:
-            sign = -sign
+        if step_prev is not None:
+            # orient the predictor along the previous step (passes limit points, where the
+            # tangent K^-1 P reverses, without being fooled by fast-rotating tangents)
+            sign = 1.0 if float(uP @ step_prev) >= 0.0 else -1.0
         uP1 = uP
         converged = False
         while not converged:
@@ -385,7 +393,8 @@ def follow_mgdc(
                 total_iterations += 1
             # A corrector that wandered far from its predictor may have jumped to another
             # branch: reject the step and retry with half the size.
-            if converged and np.linalg.norm(q_try - q) > 4.0 * s:
+            # Too many iterations also means the predictor overshot a strongly curved path.
+            if converged and (np.linalg.norm(q_try - q) > 4.0 * s or it > max_accept_iter):
                 converged = False
             if not converged:
                 rejected += 1
@@ -402,7 +411,7 @@ def follow_mgdc(
         if not converged:
             break
         # accepted: the system holds K at q_try
-        uP_prev = uP1
+        step_prev = system.reduced(q_try) - system.reduced(q)
         q, lam = q_try, lam_try
         uP = system.solve(P)
         d = _node_displacement(q, X, control)

@@ -23,27 +23,34 @@ class Rod:
     """One rod of a structure: its global node indices (in order) and section data."""
 
     nodes: np.ndarray
-    width: np.ndarray  # (N-1,) m
-    thickness: np.ndarray  # (N-1,) m
+    width: np.ndarray  # (N-1, 2) m: each edge's first and second half
+    thickness: np.ndarray  # (N-1, 2) m
     E: float  # Pa
 
     @property
     def EA(self):
-        return self.E * self.width * self.thickness
+        """(N-1,) axial stiffness of each edge, N (its two halves in series)."""
+        half = self.E * self.width * self.thickness
+        return 2.0 / (1.0 / half[:, 0] + 1.0 / half[:, 1])
 
     @property
     def EI(self):
+        """(N-1, 2) bending stiffness of each half edge, N m^2."""
         return self.E * self.width * self.thickness**3 / 12.0
 
 
 def _per_edge(value, n_edges, name):
+    """Section data per half edge, (n_edges, 2): a scalar, one value per edge, or one per
+    half edge (the section may change at an edge's midpoint)."""
     arr = np.asarray(value, dtype=float)
     if arr.ndim == 0:
         arr = np.full(n_edges, float(arr))
-    if arr.shape != (n_edges,):
+    if arr.shape == (n_edges,):
+        arr = np.stack([arr, arr], axis=1)
+    if arr.shape != (n_edges, 2):
         raise ValueError(
-            f"{name} must be a scalar or an array of one value per edge, shape ({n_edges},); "
-            f"got shape {arr.shape}"
+            f"{name} must be a scalar, one value per edge, shape ({n_edges},), or one per "
+            f"half edge, shape ({n_edges}, 2); got shape {arr.shape}"
         )
     if not np.all(np.isfinite(arr)) or np.any(arr <= 0.0):
         raise ValueError(f"{name} must be finite and > 0 (m); got min {np.nanmin(arr)!r}")
@@ -103,7 +110,8 @@ class Structure:
     def add_rod(self, xz, width, thickness, E) -> Rod:
         """Add a rod through the points ``xz`` (N, 2) m; its shape is stress free.
 
-        ``width`` and ``thickness`` (m) are scalars or one value per edge (N-1,);
+        ``width`` and ``thickness`` (m) are scalars, one value per edge (N-1,), or one
+        per half edge (N-1, 2) for a section that changes at an edge's midpoint;
         ``E`` is Young's modulus (Pa).
         """
         xz = np.asarray(xz, dtype=float)
@@ -137,11 +145,14 @@ class Structure:
         self._stretch_params.append(np.stack([EA, lengths], axis=1))
 
         EI = rod.EI
-        voronoi = 0.5 * (lengths[:-1] + lengths[1:])
-        EI_node = 0.5 * (EI[:-1] + EI[1:])  # nodes between edges of different widths
+        # Node stiffness EI / l_bar over the Voronoi region (half of each adjacent edge). Where
+        # the section changes at a node the two halves act in series (the moment is common,
+        # the rotations add), so the compliances add: l_bar / EI_eff = l0/(2 EI0) + l1/(2 EI1).
+        # An arithmetic mean of EI there would make every result converge only as O(1/N).
+        node_stiffness = 1.0 / (0.5 * lengths[:-1] / EI[:-1, 1] + 0.5 * lengths[1:] / EI[1:, 0])
         kappa_bar = _turning_curvatures(xz)
         self._bend_nodes.append(np.stack([nodes[:-2], nodes[1:-1], nodes[2:]], axis=1))
-        self._bend_params.append(np.stack([EI_node / voronoi, kappa_bar], axis=1))
+        self._bend_params.append(np.stack([node_stiffness, kappa_bar], axis=1))
         self._cache = None
         return rod
 

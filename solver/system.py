@@ -27,6 +27,10 @@ class ReducedSystem:
         self.elements = elements
         self.dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
         self.dofs = element_dofs(elements, self.dof_map)
+        # one full DOF per reduced DOF, to read reduced values off full positions
+        free = np.flatnonzero(self.dof_map >= 0)
+        self.representative = np.empty(int(n_reduced), dtype=np.int64)
+        self.representative[self.dof_map[free]] = free
         self.n = int(n_reduced)
         self.bandwidth = int(bandwidth)
         self.band = np.zeros((self.bandwidth + 1, max(self.n, 1)))
@@ -82,6 +86,10 @@ class ReducedSystem:
         else:
             out = ldlt_solve(self.band, np.ascontiguousarray(b2))
         return out.ravel() if one else out
+
+    def reduced(self, q):
+        """Reduced DOF values of the full vector ``q``."""
+        return q[self.representative]
 
     def increment(self, q, du, scale=1.0):
         """Apply a reduced increment to the full positions in place."""

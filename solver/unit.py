@@ -1,0 +1,229 @@
+"""Simulate one bistable unit and report its snap-through metrics.
+
+    >>> from solver.unit import UnitGeometry, simulate_unit
+    >>> r = simulate_unit(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3))
+    >>> r.bistable, r.F_cr, r.S, r.theta_deg
+
+The apex is pushed down with MGDC from d = 0 until the force has crossed zero twice; the
+unstable state (ii) and the second stable state (iii) are then solved exactly at F = 0 by
+Newton from the bracketing path states, and S, theta and the base shape come from (iii).
+Energies are the elastic energies of the exact states, which equal the work of F along the
+path (the supports do no work), i.e. the integrals of F dd. SI units throughout.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from solver.continuation import ConvergenceError
+from solver.unit_model import DEFAULT_NODES, UnitGeometry, UnitModel, build_unit
+
+__all__ = ["UnitGeometry", "UnitResult", "simulate_unit", "STATUS_CODES"]
+
+STATUS_CODES = {"ok": 0, "monostable": 1, "not_converged": 2, "invalid_geometry": 3}
+NAN = float("nan")
+
+
+@dataclass
+class UnitResult:
+    """Metrics of one unit (SI: N, m, J, degrees for angles). NaN where a field does not exist."""
+
+    geometry: UnitGeometry
+    status: str
+    bistable: bool = False
+    F_cr: float = NAN
+    d_cr: float = NAN
+    d_unstable: float = NAN
+    d_second: float = NAN
+    S: float = NAN
+    theta_deg: float = NAN
+    energy_barrier: float = NAN
+    energy_stored: float = NAN
+    self_standing: bool | None = None
+    bifurcation: bool | None = None
+    curve: tuple = (np.zeros(0), np.zeros(0))
+    base_shape: np.ndarray = field(default_factory=lambda: np.full((0, 2), np.nan))
+    shapes: dict = field(default_factory=dict)
+    stability: dict = field(default_factory=dict)
+    solve_time: float = NAN
+    n_nodes: int = 0
+
+    @property
+    def status_code(self) -> int:
+        """0 ok, 1 monostable, 2 not converged (the design-map codes)."""
+        if self.status in STATUS_CODES:
+            return STATUS_CODES[self.status]
+        return STATUS_CODES["not_converged"]
+
+    def summary(self) -> dict:
+        """The scalar metrics as a plain dict (SI)."""
+        keys = ("status", "bistable", "F_cr", "d_cr", "d_unstable", "d_second", "S",
+                "theta_deg", "energy_barrier", "energy_stored", "self_standing",
+                "bifurcation", "solve_time", "n_nodes")
+        return {k: getattr(self, k) for k in keys}
+
+
+def simulate_unit(
+    g: UnitGeometry,
+    nodes: int | None = None,
+    method: str = "mgdc",
+    tie: str = "exact",
+    tie_stiffness: float | None = None,
+    check_self_standing: bool = True,
+    steps: int = 60,
+) -> UnitResult:
+    """Simulate the push test of one unit and extract F_cr, S, theta and the shapes.
+
+    ``nodes``: resolution (about the number of base nodes; None = the converged default);
+    ``method``: "mgdc" (load control, the paper's) or "displacement";
+    ``tie``: "exact" or "spring" bonds; ``steps``: first-step size as a fraction of 3 h.
+    Never raises for a geometry that can be built: failures come back in ``status``.
+    """
+    if not isinstance(g, UnitGeometry):
+        raise ValueError(f"g must be a UnitGeometry; got {type(g).__name__}")
+    nodes = DEFAULT_NODES if nodes is None else nodes
+    t0 = time.perf_counter()
+    if g.h == 0.0:
+        straight = np.stack([np.linspace(0, g.L, 3), np.zeros(3)], 1)
+        return UnitResult(g, "monostable", base_shape=np.full((0, 2), np.nan),
+                          shapes={"i": {"base": straight}}, solve_time=0.0)
+    model = build_unit(g, nodes=nodes, tie=tie, tie_stiffness=tie_stiffness)
+    try:
+        result = _simulate(g, model, method, steps, check_self_standing, nodes, tie, tie_stiffness)
+    except ConvergenceError as exc:
+        result = UnitResult(g, f"not converged: {exc}")
+    except (FloatingPointError, np.linalg.LinAlgError) as exc:
+        result = UnitResult(g, f"not converged: numerical failure ({exc})")
+    result.solve_time = time.perf_counter() - t0
+    result.n_nodes = model.structure.n_nodes
+    return result
+
+
+def _stop_after_second_crossing(rows):
+    F = rows["F"]
+    if len(F) < 3 or F[-1] <= 0.0:
+        return False
+    return bool(np.any(np.asarray(F[:-1]) < 0.0))
+
+
+def _simulate(g, model, method, steps, check_self_standing, nodes, tie, tie_stiffness):
+    st = model.structure
+    distance = 3.0 * g.h
+    path = st.push(model.apex, (0.0, -1.0), distance, method=method, steps=steps,
+                   stop=_stop_after_second_crossing)
+    d, F = path.displacement, path.force
+    result = UnitResult(g, "ok", curve=(d.copy(), F.copy()))
+    result.stability = {
+        "negative_eigenvalues": path.negative_eigenvalues.copy(),
+        "negative_eigenvalues_displacement": path.negative_eigenvalues_displacement.copy(),
+    }
+    arch, base = model.arch_nodes, model.base_nodes
+
+    def shape(pos):
+        return {"arch": pos[arch].copy(), "base": pos[base].copy()}
+
+    i_pk = _first_peak(F)
+    if i_pk is not None:
+        result.F_cr, result.d_cr = _refine_peak(d, F, i_pk)
+        result.shapes["i"] = shape(path.positions[i_pk])
+    j = _first_crossing(F, start=(i_pk or 0), downward=True)
+    k = _first_crossing(F, start=j, downward=False) if j is not None else None
+    if k is None:
+        if path.status != "ok" and not path.status.startswith("stopped"):
+            result.status = path.status
+        elif j is None or path.status == "ok":
+            result.status = "monostable"
+        else:
+            result.status = path.status
+        return result
+
+    pos_ii = _solve_zero_force(st, path, j)
+    pos_iii = _solve_zero_force(st, path, k)
+    X = st.reference_positions
+    result.d_unstable = float(X[model.apex, 1] - pos_ii[model.apex, 1])
+    result.d_second = float(X[model.apex, 1] - pos_iii[model.apex, 1])
+    if not (d[j - 1] - 1e-9 <= result.d_unstable <= d[j] + 1e-9 and
+            d[k - 1] - 1e-9 <= result.d_second <= d[k] + 1e-9):
+        result.status = "not converged: the zero-force states left their path brackets"
+        return result
+    result.bistable = True
+    base_pos = pos_iii[base]
+    result.base_shape = base_pos.copy()
+    result.S = float(base_pos[-1, 0] - base_pos[0, 0])
+    result.theta_deg = _end_tangent_angle(base_pos)
+    result.energy_barrier = st.energy(pos_ii)
+    result.energy_stored = st.energy(pos_iii)
+    result.shapes["ii"] = shape(pos_ii)
+    result.shapes["iii"] = shape(pos_iii)
+    if check_self_standing:
+        result.self_standing = _self_standing(g, model, pos_iii, nodes, tie, tie_stiffness)
+    return result
+
+
+def _first_peak(F):
+    for i in range(1, len(F) - 1):
+        if F[i] > 0 and F[i] >= F[i - 1] and F[i] > F[i + 1]:
+            return i
+    return None
+
+
+def _refine_peak(d, F, i):
+    """Vertex of the parabola through the three path points around the maximum."""
+    x, y = d[i - 1: i + 2], F[i - 1: i + 2]
+    if not (x[0] < x[1] < x[2]):
+        return float(F[i]), float(d[i])
+    a, b, c = np.polyfit(x - x[1], y, 2)
+    if a >= 0:
+        return float(F[i]), float(d[i])
+    xv = -b / (2 * a)
+    if not (x[0] - x[1] <= xv <= x[2] - x[1]):
+        return float(F[i]), float(d[i])
+    return float(c - b * b / (4 * a)), float(x[1] + xv)
+
+
+def _first_crossing(F, start, downward):
+    for i in range(max(start, 0) + 1, len(F)):
+        if downward and F[i - 1] >= 0.0 > F[i]:
+            return i
+        if not downward and F[i - 1] <= 0.0 < F[i]:
+            return i
+    return None
+
+
+def _solve_zero_force(st, path, i):
+    """Equilibrium at F = 0 from the path states bracketing the zero crossing at step i."""
+    F0, F1 = path.force[i - 1], path.force[i]
+    s = F0 / (F0 - F1)
+    guess = (1 - s) * path.positions[i - 1] + s * path.positions[i]
+    pos, _ = st.solve_equilibrium(guess, node=None)
+    return pos
+
+
+def _end_tangent_angle(base_pos):
+    """Signed angle (degrees) from the first to the last base edge; > 0 when the base curls
+    toward +z, the side the arch started on."""
+    e0 = base_pos[1] - base_pos[0]
+    e1 = base_pos[-1] - base_pos[-2]
+    a = math.atan2(e1[1], e1[0]) - math.atan2(e0[1], e0[0])
+    a = (a + math.pi) % (2 * math.pi) - math.pi
+    return math.degrees(a)
+
+
+def _self_standing(g, model, pos_iii, nodes, tie, tie_stiffness):
+    """Is state (iii) stable with the actuator and rollers removed (rigid-body motion held
+    by a statically determinate set of constraints)?"""
+    free = build_unit(g, nodes=nodes, tie=tie, tie_stiffness=tie_stiffness,
+                      actuator=False, supports=False)
+    st = free.structure
+    st.fix(free.base_mid, "xz")
+    st.fix(int(free.base_nodes[0]), "z")
+    try:
+        pos, info = st.solve_equilibrium(pos_iii, node=None)
+    except ConvergenceError:
+        return False
+    moved = float(np.max(np.abs(pos - pos_iii)))
+    return bool(info["negative_eigenvalues"] == 0 and moved < 0.25 * g.h)
