@@ -1,0 +1,82 @@
+"""`make bench`: speed figures of the solver, the unit and (if present) the pipeline.
+
+Every figure is a median of several warm runs in this process (numba kernels compiled or
+loaded from the cache first); the JIT warm-up is measured in a fresh process with an empty
+numba cache. The machine is whatever runs this: say which when you quote the numbers.
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))
+
+RUNS = int(os.environ.get("BENCH_RUNS", "7"))
+
+
+def median_time(fn, runs=RUNS):
+    times = []
+    out = None
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), min(times), out
+
+
+def jit_warmup():
+    code = (
+        "import time; t0=time.perf_counter();"
+        "from bench.cases import clamped_arch_push; clamped_arch_push();"
+        "print(time.perf_counter()-t0)"
+    )
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=os.path.dirname(HERE))
+        cold = float(subprocess.run([sys.executable, "-c", code], env=env, check=True,
+                                    capture_output=True, text=True).stdout.strip())
+        cached = float(subprocess.run([sys.executable, "-c", code], env=env, check=True,
+                                      capture_output=True, text=True).stdout.strip())
+    return cold, cached
+
+
+def main():
+    from bench.cases import clamped_arch_push, specimen_unit
+
+    print(f"snapmorph benchmarks ({os.cpu_count()} cores visible, NUMBA_NUM_THREADS=1, "
+          f"median of {RUNS} warm runs)")
+    cold, cached = jit_warmup()
+    print(f"JIT warm-up, first arch push in a fresh process: {cold:.2f} s cold (empty cache), "
+          f"{cached:.2f} s with the on-disk cache")
+
+    clamped_arch_push()
+    med, best, path = median_time(clamped_arch_push)
+    iters = int(path.info["total_iterations"]) + len(path) - 1
+    print(f"clamped arch, 101 nodes, MGDC to 2.2 h: median {med*1e3:.1f} ms (best {best*1e3:.1f} ms; "
+          f"target <= 20 ms), {len(path)} steps, {iters} Newton iterations, "
+          f"{med / iters * 1e6:.0f} us per iteration (assemble + LDL^T + solve)")
+
+    specimen_unit()
+    med, best, r = median_time(specimen_unit)
+    print(f"unit (L=100, h=20, t=0.5, w=b=5 mm) at default resolution ({r.n_nodes} nodes), "
+          f"d = 0 to state (iii) solved, self-standing check included: median {med*1e3:.1f} ms "
+          f"(best {best*1e3:.1f} ms; target <= 50 ms)")
+    med2, best2, _ = median_time(lambda: specimen_unit(check_self_standing=False))
+    print(f"  the same without the self-standing check: median {med2*1e3:.1f} ms (best {best2*1e3:.1f} ms)")
+
+    for extra in ("bench_pipeline", "bench_stability"):
+        path = os.path.join(HERE, extra + ".py")
+        if os.path.exists(path):
+            print(f"--- {extra}")
+            sys.stdout.flush()
+            subprocess.run([sys.executable, path], check=False)
+
+
+if __name__ == "__main__":
+    main()

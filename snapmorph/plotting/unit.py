@@ -1,0 +1,69 @@
+"""Plots of one unit: force–displacement curve with states (i)–(iii), and the shapes."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+STATE_STYLE = {"i": ("C3", "(i) F_cr"), "ii": ("C1", "(ii) unstable"), "iii": ("C2", "(iii) second stable")}
+
+
+def state_points(r):
+    """(d, F) of the states (i)-(iii) that exist, in mm and N."""
+    pts = {}
+    if r.F_cr == r.F_cr:
+        pts["i"] = (r.d_cr * 1e3, r.F_cr)
+    if r.d_unstable == r.d_unstable:
+        pts["ii"] = (r.d_unstable * 1e3, 0.0)
+    if r.d_second == r.d_second:
+        pts["iii"] = (r.d_second * 1e3, 0.0)
+    return pts
+
+
+def draw_curve(ax, r, label=None, color="k", mark=True, **kw):
+    d, F = r.curve
+    ax.plot(d * 1e3, F, color=color, label=label, **kw)
+    if mark:
+        for key, (x, y) in state_points(r).items():
+            c, name = STATE_STYLE[key]
+            ax.plot(x, y, "o", color=c, ms=6, zorder=5)
+    ax.axhline(0, color="0.6", lw=0.8)
+    ax.set_xlabel("apex displacement d (mm)")
+    ax.set_ylabel("force F (N)")
+
+
+def draw_shapes(ax, r, offset=0.0):
+    for key in ("i", "ii", "iii"):
+        if key not in r.shapes:
+            continue
+        c, name = STATE_STYLE[key]
+        s = r.shapes[key]
+        for part, ls in (("base", "-"), ("arch", "--")):
+            if part in s:
+                xy = s[part] * 1e3
+                ax.plot(xy[:, 0], xy[:, 1] + offset, ls, color=c, lw=1.2,
+                        label=f"{name} {part}" if part == "base" else None)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("z (mm)")
+
+
+def plot_unit(r, path):
+    """One figure: the curve with (i)-(iii) marked, and the three deformed shapes."""
+    g = r.geometry
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    draw_curve(a1, r)
+    for key, (x, y) in state_points(r).items():
+        c, name = STATE_STYLE[key]
+        a1.annotate(name, (x, y), textcoords="offset points", xytext=(6, 6), color=c, fontsize=8)
+    a1.set_title(f"L={g.L*1e3:g} h={g.h*1e3:g} t={g.t*1e3:g} w={g.w*1e3:g} b={g.b*1e3:g} mm: {r.status}")
+    draw_shapes(a2, r)
+    a2.legend(fontsize=7, loc="lower right")
+    a2.set_title(f"S/L = {r.S / g.L:.3f}, theta = {r.theta_deg:.1f} deg" if r.bistable else "shapes")
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
