@@ -1,1 +1,10 @@
-"""maps package."""
+"""The design-map database: load a map and look up unit properties by interpolation.
+
+    from maps import DesignMap
+    dm = DesignMap.load()                       # maps/data/default.nc (see DesignMap.load)
+    dm.at(h_over_L=0.2, t_over_L=0.005, w_over_L=0.05)["theta"]
+"""
+
+from maps.designmap import CI_MAP, DEFAULT_MAP, DesignMap, MapDomainError, MapFileError
+
+__all__ = ["DesignMap", "MapDomainError", "MapFileError", "DEFAULT_MAP", "CI_MAP"]

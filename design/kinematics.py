@@ -1,0 +1,128 @@
+"""Forward kinematics of an array (paper, Section 3).
+
+The base of an array in any snapping state is the concatenation of its units' base shapes, each
+translated and rotated so that it starts where the previous one ends, along the previous end
+tangent. Neighbouring units are assumed not to interact (the paper's conjecture, validated on
+three units).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from design.lookup import MapLookup
+from design.shapes import UnitShape, unit_shape
+from design.units import Unit
+
+
+@dataclass(frozen=True)
+class Chain:
+    """A placed array: `xy` (K, 2) base polyline in m; `pieces[i]` the (k_i, 2) polyline of
+    unit i (sharing end points with its neighbours); `joints` (n + 1, 2) the unit end points;
+    `angles` (n + 1,) the base tangent direction (rad) at each joint."""
+
+    xy: np.ndarray
+    pieces: tuple
+    joints: np.ndarray
+    angles: np.ndarray
+
+
+def chain(units, snapped, source: str = "map", lookup: MapLookup | None = None,
+          start=(0.0, 0.0), start_angle: float = 0.0, **kw) -> Chain:
+    """Place the units' base shapes end to end, from `start` (m) heading `start_angle` (rad)."""
+    units, snapped = _check(units, snapped)
+    if source == "map" and lookup is None and any(s and not u.is_spacer
+                                                  for u, s in zip(units, snapped)):
+        lookup = MapLookup()
+    shapes = [unit_shape(u, s, source=source, lookup=lookup, **kw)
+              for u, s in zip(units, snapped)]
+    return place(shapes, start, start_angle)
+
+
+def place(shapes: list[UnitShape], start=(0.0, 0.0), start_angle: float = 0.0) -> Chain:
+    """Concatenate unit-frame shapes, matching end points and end tangents."""
+    pos = np.array(start, dtype=float)
+    ang = float(start_angle)
+    pieces, joints, angles = [], [pos.copy()], [ang]
+    for shape in shapes:
+        c, s = math.cos(ang), math.sin(ang)
+        rot = np.array([[c, -s], [s, c]])
+        piece = shape.xy @ rot.T + pos
+        piece[0] = pos  # exact shared joint
+        pieces.append(piece)
+        pos = piece[-1].copy()
+        ang = ang + shape.end_angle
+        joints.append(pos.copy())
+        angles.append(ang)
+    xy = np.vstack([pieces[0]] + [p[1:] for p in pieces[1:]]) if pieces else pos[None, :]
+    return Chain(xy, tuple(pieces), np.array(joints), np.array(angles))
+
+
+def forward_kinematics(units, snapped=None, source: str = "map", design_map=None,
+                       start=(0.0, 0.0), start_angle: float = 0.0, **kw) -> np.ndarray:
+    """Base polyline (K, 2) in m of `units` with unit i snapped when `snapped[i]`.
+
+    `snapped`: booleans, a '0'/'1' string, or None (all snapped). Starts at `start` heading
+    `start_angle` (rad; default (0, 0) and +x). `source`: "map" (design map, `design_map` or the
+    default one) or "simulate" (direct simulation; keyword `E`, `nodes` passed on).
+    """
+    lookup = MapLookup(design_map) if (source == "map" and design_map is not None) else None
+    return chain(units, snapped, source=source, lookup=lookup, start=start,
+                 start_angle=start_angle, **kw).xy
+
+
+def parse_state(state, n: int) -> list[bool]:
+    """A state as n booleans, from a '0'/'1' string (char i: unit i + 1 snapped) or a sequence."""
+    if state is None:
+        return [True] * n
+    if isinstance(state, str):
+        s = state.strip()
+        if len(s) != n or any(ch not in "01" for ch in s):
+            raise ValueError(f"state must be a string of {n} characters 0/1 (one per unit, "
+                             f"1 = snapped), got {state!r}")
+        return [ch == "1" for ch in s]
+    flags = list(state)
+    if len(flags) != n:
+        raise ValueError(f"snapped must have one entry per unit ({n}), got {len(flags)}")
+    out = []
+    for f in flags:
+        if f not in (0, 1, True, False):
+            raise ValueError(f"snapped entries must be booleans, got {f!r}")
+        out.append(bool(f))
+    return out
+
+
+def all_states(units, source: str = "map", design_map=None, chains: bool = False, **kw) -> dict:
+    """Every stable state of the array: {state string: (K, 2) base polyline in m} (or
+    {state string: Chain} with chains=True).
+
+    Units that are spacers have one state only, so there are 2ⁿ states for n arched units;
+    their characters in the state string are always '0'. Ordered from all unsnapped upwards,
+    unit 1 being the most significant character.
+    """
+    units, _ = _check(units, None)
+    arched = [i for i, u in enumerate(units) if not u.is_spacer]
+    lookup = MapLookup(design_map) if source == "map" else None
+    out = {}
+    for bits in itertools.product((False, True), repeat=len(arched)):
+        snapped = [False] * len(units)
+        for i, b in zip(arched, bits):
+            snapped[i] = b
+        key = "".join("1" if s else "0" for s in snapped)
+        ch = chain(units, snapped, source=source, lookup=lookup, **kw)
+        out[key] = ch if chains else ch.xy
+    return out
+
+
+def _check(units, snapped):
+    units = list(units)
+    if not units:
+        raise ValueError("an array needs at least one unit")
+    for i, u in enumerate(units):
+        if not isinstance(u, Unit):
+            raise ValueError(f"unit {i + 1} is not a design.Unit: {u!r}")
+    return units, parse_state(snapped, len(units))

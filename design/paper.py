@@ -1,0 +1,166 @@
+"""The paper's forward-kinematics and inverse-design cases (Sections 3 and 4), for the examples
+and `make figures`.
+
+- Three identical units, t = 0.5, h = 20, w = 5, L = 100 mm: their 2³ = 8 states (Fig. "fk").
+- The asymmetric M from five equally spaced points (Fig. "inverse_experiment" a-f).
+- The S of circular arms joined by a straight (Fig. "inverse_experiment" g-j).
+
+The paper gives neither the M's points nor the S's radii. Our choices, made once from the
+paper's description and not tuned to its Table 3:
+- M: x = 0, 100, 200, 300, 400 mm, y = 0, 40, 15, 50, 0 mm (a shallow M, right hump higher);
+- S: each arm a half circle (an S turns 180° one way, then 180° back) of radius 125 mm in four
+  equal segments, and a 100 mm straight between the arms.
+Sheet t = 0.5 mm and strip w = 5 mm throughout, as the paper's specimens.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from design.inverse import inverse_design
+from design.kinematics import all_states
+from design.lookup import MapLookup, load_map
+from design.units import Unit
+
+T, W = 0.5e-3, 5e-3
+
+#: three-unit forward kinematics (m)
+FK_UNIT = dict(L=100e-3, h=20e-3, t=T, w=W)
+
+#: M target points (mm) and the paper's control points: the ends, the centre, and the one added
+#: between the left-most and the centre point
+M_POINTS_MM = np.array([[0.0, 0.0], [100.0, 40.0], [200.0, 15.0], [300.0, 50.0], [400.0, 0.0]])
+M_PAPER_CONTROLS_MM = (100.0, 200.0)
+#: Table 3, M: (L, h) mm of the four arched units; a 67.3 mm spacer between units 2 and 3
+TABLE3_M = ((72.6, 6.9), (73.8, 11.3), (129.4, 21.1), (133.2, 31.3))
+TABLE3_M_SPACER = 67.3
+
+#: S: arm radius (m), turning of each arm (deg), segments per arm, straight (m)
+S_RADIUS, S_ARM_TURN_DEG, S_SEGMENTS, S_STRAIGHT = 0.125, 180.0, 4, 0.100
+#: Table 3, S: every unit (L, h) mm
+TABLE3_S = (106.7, 25.8)
+
+
+# --- forward kinematics ---------------------------------------------------------------------------
+def three_units(design_map=None, source: str = "map") -> dict:
+    """{state: Chain} of the paper's three identical units. From the map, b is the map's b/L
+    times L (0 for the default map, as the paper's parametric study); simulated, b = w as the
+    paper's specimens."""
+    if source == "map":
+        dm = design_map if design_map is not None else load_map()
+        b = MapLookup(dm).b_over_L * FK_UNIT["L"]
+    else:
+        dm, b = None, W
+    unit = Unit(**FK_UNIT, side=1, b=b)
+    return all_states([unit] * 3, source=source, design_map=dm, chains=True)
+
+
+# --- the M ----------------------------------------------------------------------------------------
+def design_M(design_map=None, controls: str = "paper", refine: bool = False, tol: float = 0.01):
+    """Inverse design of the M; controls "paper" (the paper's 4 control points) or "auto"."""
+    dm = design_map if design_map is not None else load_map()
+    kw = {"controls": np.array(M_PAPER_CONTROLS_MM) * 1e-3} if controls == "paper" else {}
+    return inverse_design(M_POINTS_MM * 1e-3, t=T, w=W, design_map=dm, tol=tol, refine=refine,
+                          **kw)
+
+
+def compare_M(d, design_map=None) -> str:
+    """Our arched units beside Table 3's, in order, with h/L (the scale-free comparison)."""
+    ours = [(u.L * 1e3, u.h * 1e3, u.side) for u in d.units if not u.is_spacer]
+    spacers = [u.L * 1e3 for u in d.units if u.is_spacer]
+    lines = [f"{'unit':>4}  {'Table 3 L, h mm':>15}  {'ours L, h mm':>14}  side  "
+             f"{'Table 3 h/L':>11}  {'ours h/L':>8}"]
+    for i in range(max(len(ours), len(TABLE3_M))):
+        p = TABLE3_M[i] if i < len(TABLE3_M) else None
+        o = ours[i] if i < len(ours) else None
+        lines.append(
+            f"{i + 1:>4}  {f'{p[0]:.1f}, {p[1]:.1f}' if p else '':>15}  "
+            f"{f'{o[0]:.1f}, {o[1]:.1f}' if o else '':>14}  {f'{o[2]:+d}' if o else '':>4}  "
+            f"{f'{p[1] / p[0]:.3f}' if p else '':>11}  {f'{o[1] / o[0]:.3f}' if o else '':>8}")
+    lines.append(f"spacers: Table 3 {TABLE3_M_SPACER} mm; ours "
+                 f"{', '.join(f'{s:.1f}' for s in spacers) or 'none'} mm")
+    lines.append("Table 3's units in our map: " + ", ".join(
+        _in_map(L, h, design_map) for L, h in TABLE3_M))
+    return "\n".join(lines)
+
+
+def _in_map(L_mm, h_mm, design_map) -> str:
+    """'θ over S' of a Table 3 unit in our map, as text."""
+    lk = MapLookup(design_map if design_map is not None else load_map())
+    L, h = L_mm * 1e-3, h_mm * 1e-3
+    try:
+        theta, S = lk.theta_S(h / L, T / L, W / L)
+    except ValueError:
+        return "(not in the map)"
+    return f"{theta:.1f}° over {S * L * 1e3:.1f} mm"
+
+
+# --- the S ----------------------------------------------------------------------------------------
+def s_control_points(R=S_RADIUS, turn=S_ARM_TURN_DEG, n=S_SEGMENTS, straight=S_STRAIGHT):
+    """(points (2n + 2, 2) m, tangents (2n + 2,) deg): left-turning arm, straight, right arm."""
+    pts, ang = [], []
+    for i in range(n + 1):
+        a = math.radians(turn * i / n)
+        pts.append((R * math.sin(a), R * (1 - math.cos(a))))
+        ang.append(turn * i / n)
+    a = math.radians(turn)
+    p = np.array(pts[-1]) + straight * np.array([math.cos(a), math.sin(a)])
+    c = p + R * np.array([math.sin(a), -math.cos(a)])  # centre of the right-turning arm
+    for i in range(n + 1):
+        b = a - math.radians(turn * i / n)
+        pts.append(tuple(c + R * np.array([-math.sin(b), math.cos(b)])))
+        ang.append(turn - turn * i / n)
+    return np.array(pts), np.array(ang)
+
+
+def design_S(design_map=None, **shape):
+    """Inverse design of the S from control points with tangents (no spline)."""
+    dm = design_map if design_map is not None else load_map()
+    pts, ang = s_control_points(**shape)
+    return inverse_design(pts, t=T, w=W, tangents=ang, design_map=dm)
+
+
+def table3_S_unit_in_map(design_map=None):
+    """(θ deg, S mm) our map gives for Table 3's S unit (106.7, 25.8) mm; ValueError if the
+    map does not cover it."""
+    lk = MapLookup(design_map if design_map is not None else load_map())
+    L, h = TABLE3_S[0] * 1e-3, TABLE3_S[1] * 1e-3
+    theta, S = lk.theta_S(h / L, T / L, W / L)
+    return theta, S * L * 1e3
+
+
+def compare_S(d, design_map=None) -> str:
+    """Our S unit beside Table 3's."""
+    u = next(u for u in d.units if not u.is_spacer)
+    lines = [f"every arched unit: ours (L, h) = ({u.L * 1e3:.1f}, {u.h * 1e3:.1f}) mm, "
+             f"h/L = {u.h / u.L:.3f}; Table 3 ({TABLE3_S[0]}, {TABLE3_S[1]}) mm, "
+             f"h/L = {TABLE3_S[1] / TABLE3_S[0]:.3f}"]
+    try:
+        theta, S = table3_S_unit_in_map(design_map)
+        lines.append(f"Table 3's unit in our map: θ = {theta:.1f}° over S = {S:.1f} mm, so an arm "
+                     f"of {S_SEGMENTS} such units would turn {S_SEGMENTS * theta:.0f}°")
+    except ValueError as exc:
+        lines.append(f"Table 3's unit is not covered by our map: {exc}")
+    return "\n".join(lines)
+
+
+# --- figures --------------------------------------------------------------------------------------
+def write_figures(out, design_map=None) -> list[Path]:
+    """The paper's Section 3-4 figures into `out`: fk_states.png, inverse_M.png, inverse_S.png
+    (with the M's and S's units.csv and drawings under out/inverse_M/, out/inverse_S/)."""
+    from design.drawings import write_drawings
+    from design.plots import plot_design, plot_states
+    from design.units import write_units_csv
+
+    out = Path(out)
+    dm = design_map if design_map is not None else load_map()
+    paths = [plot_states({k: c.xy for k, c in three_units(dm).items()}, out / "fk_states.png",
+                         title="three units t = 0.5, h = 20, w = 5, L = 100 mm: the 8 states")]
+    for name, d in (("M", design_M(dm, "paper")), ("S", design_S(dm))):
+        paths.append(plot_design(d, out / f"inverse_{name}.png"))
+        paths.append(write_units_csv(d.units, out / f"inverse_{name}" / "units.csv"))
+        paths += write_drawings(d.units, out / f"inverse_{name}", bed_length_mm=600.0)
+    return paths

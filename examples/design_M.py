@@ -1,0 +1,46 @@
+"""The paper's asymmetric M (Section 4, Fig. "inverse_experiment" a-f, Table 3), from five
+equally spaced target points through a spline: x = 0, 100, 200, 300, 400 mm, y = 0, 40, 15,
+50, 0 mm (the paper does not list its points; see design/paper.py), t = 0.5 mm, w = 5 mm.
+
+Two designs: with the paper's control points (the ends, the centre, and the one it added
+between the left-most and the centre point: x = 0, 100, 200, 400 mm), and with our automatic
+ones (bisection until the deviation is below 1 %).
+
+    python examples/design_M.py [--map PATH] [--out DIR] [--refine]
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from design.lookup import load_map
+from design.paper import compare_M, design_M
+
+
+def run(design_map=None, controls: str = "paper", refine: bool = False, out=None):
+    """The M design; units.csv, design.png and the drawings into `out` when given."""
+    d = design_M(design_map, controls, refine)
+    if out is not None:
+        d.write(out, bed_length_mm=600.0)
+    return d
+
+
+def main(argv=None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--map", default=None, help="design map (default: the committed one)")
+    p.add_argument("--out", default="build/examples/M")
+    p.add_argument("--refine", action="store_true", help="least-squares refinement too")
+    args = p.parse_args(argv)
+    dm = load_map(args.map)
+    for controls in ("paper", "auto"):
+        d = run(dm, controls, args.refine, Path(args.out) / controls)
+        xs = ", ".join(f"{x * 1e3:.0f}" for x in d.control_points[:, 0])
+        print(f"== M, {controls} control points (x = {xs} mm)")
+        print(d.summary())
+        print(compare_M(d, dm))
+        print()
+
+
+if __name__ == "__main__":
+    main()

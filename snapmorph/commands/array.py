@@ -1,0 +1,149 @@
+"""`snapmorph array`: simulate a whole array, snapping units one at a time (issue 6)."""
+
+from __future__ import annotations
+
+import argparse
+
+HELP = "simulate a whole array (one DER model), snapping units one at a time"
+DESCRIPTION = """Simulate an array as one DER model: one end clamped, no gravity; each unit is
+snapped by its own self-equilibrated actuator (apex pushed towards its base, reaction on its two
+supports), which is then released. Compares the base with forward kinematics built from
+directly simulated single units (source "simulate").
+
+  snapmorph array --units units.csv --state 101 [--order 2,0] [--plot f.png] [--csv f.csv]
+  snapmorph array --units units.csv --all --out DIR      every state, overlay plots, tables
+  snapmorph array --paper-three [--out DIR]              the paper's three units, 8 states
+  snapmorph array --paper-M [--out DIR]                  the paper's Table 3 M array, 16 states
+
+Lengths in units.csv are millimetres; units.csv has no b column (--b-over-L sets b = b/L L)."""
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    p = sub.add_parser("array", help=HELP, description=DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--units", help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
+    what.add_argument("--paper-three", action="store_true",
+                      help="every state of the paper's three units (t 0.5, h 20, w 5, L 100 mm)")
+    what.add_argument("--paper-M", action="store_true",
+                      help="every state of the paper's inverse-designed M (Table 3 units)")
+    p.add_argument("--state", default=None,
+                   help="one character per unit, '1' = snapped, e.g. 101 (default: every arched "
+                        "unit snapped)")
+    p.add_argument("--order", default=None,
+                   help="snapping order, 0-based unit indices, e.g. 2,0 (default ascending; "
+                        "units listed but not snapped in --state are skipped)")
+    p.add_argument("--all", action="store_true", help="with --units: every state (a study)")
+    p.add_argument("--b-over-L", type=float, default=0.0,
+                   help="b / L of the arched units read from --units (default 0)")
+    p.add_argument("--b", type=float, default=None,
+                   help="with --paper-three: b in mm (default 5 = w, the specimens)")
+    p.add_argument("--nodes", type=int, default=None,
+                   help="resolution: base nodes per unit (default 161, as snapmorph unit)")
+    p.add_argument("--E", type=float, default=2.2e9, help="Young's modulus, Pa (default PETG)")
+    p.add_argument("--plot", default=None, help="single state: write a figure (PNG/PDF/SVG)")
+    p.add_argument("--csv", default=None, help="single state: write the base polyline (mm)")
+    p.add_argument("--no-fk", action="store_true",
+                   help="skip the comparison with forward kinematics")
+    p.add_argument("--out", default=None,
+                   help="study: folder for study.md, study.json, states.png "
+                        "(default build/array/<name>)")
+    p.set_defaults(run=run)
+    return p
+
+
+def _check(args):
+    from snapmorph.cli import CommandError
+
+    study = args.paper_three or args.paper_M or args.all
+    if study and (args.state or args.order or args.plot or args.csv):
+        raise CommandError("--state, --order, --plot and --csv apply to one state "
+                           "(not with --all, --paper-three, --paper-M)")
+    if args.all and not args.units:
+        raise CommandError("--all needs --units")
+    if args.b is not None and not args.paper_three:
+        raise CommandError("--b applies to --paper-three (use --b-over-L with --units)")
+    if not (0.0 <= args.b_over_L < 0.5):
+        raise CommandError(f"--b-over-L must be in [0, 0.5); got {args.b_over_L}")
+    if args.b is not None and args.b < 0:
+        raise CommandError(f"--b must be >= 0 mm; got {args.b}")
+    return study
+
+
+def run(args) -> int:
+    import json
+    from pathlib import Path
+
+    study = _check(args)
+    if study:
+        from design.array_plots import plot_study
+        from design.array_study import paper_three_units, run_study, table3_M_units
+        from design.units import read_units_csv
+
+        if args.paper_three:
+            b = None if args.b is None else args.b * 1e-3
+            units = paper_three_units(b)
+            name = f"paper three units (b = {units[0].b * 1e3:g} mm)"
+            folder = "three_units"
+        elif args.paper_M:
+            units, name, folder = table3_M_units(), "paper Table 3 M (b = 0)", "M"
+        else:
+            units = read_units_csv(args.units, b_over_L=args.b_over_L)
+            name, folder = str(args.units), Path(args.units).stem
+        out = Path(args.out) if args.out else Path("build/array") / folder
+        s = run_study(units, name=name, nodes=args.nodes, E=args.E, fk=not args.no_fk)
+        print(s.table())
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "study.md").write_text(s.table() + "\n")
+        (out / "study.json").write_text(json.dumps(s.summary(), indent=1, default=float) + "\n")
+        png = plot_study(s, out / "states.png", title=name)
+        print(f"wrote {out / 'study.md'}, {out / 'study.json'}, {png}")
+        return 0 if s.ok else 1
+    return _one_state(args)
+
+
+def _one_state(args) -> int:
+    import math
+
+    import numpy as np
+
+    from design.array_study import curve_deviation
+    from design.arrays import simulate_array
+    from design.kinematics import chain, parse_state
+    from design.units import read_units_csv
+
+    units = read_units_csv(args.units, b_over_L=args.b_over_L)
+    if args.state is None:
+        snapped = [not u.is_spacer for u in units]
+    else:
+        snapped = parse_state(args.state, len(units))
+    r = simulate_array(units, snapped, order=args.order, nodes=args.nodes, E=args.E)
+    key = "".join("1" if s else "0" for s in snapped)
+    print(f"state {key}: {len(units)} units, snapped in the order "
+          f"{', '.join(str(k) for k in r.order) or '-'} (0-based); status {r.status}; "
+          f"{r.time:.2f} s")
+    for k, s in enumerate(r.snaps, start=1):
+        print(f"  snap {k}: unit index {s.unit} ({s.status}): F_cr {s.F_cr:.4g} N at "
+              f"{s.d_cr * 1e3:.3g} mm, zero force at {s.d_zero * 1e3:.4g} mm, turned "
+              f"{s.turn_deg:.3f} deg after release, {s.steps} steps, {s.time:.2f} s")
+    fk = None
+    if not args.no_fk and r.status == "ok":
+        ch = chain(units, snapped, source="simulate", nodes=r.model.nodes, E=args.E)
+        fk = ch.xy
+        length = r.model.length
+        print(f"forward kinematics (source simulate): max deviation "
+              f"{100 * curve_deviation(r.base, fk, length):.3f} % of the array length, tip "
+              f"{np.hypot(*(r.base[-1] - fk[-1])) * 1e3:.3f} mm, end direction "
+              f"{math.degrees(r.angles[-1] - ch.angles[-1]):+.3f} deg")
+    print(f"{'joint':>5} {'x_mm':>9} {'z_mm':>9} {'dir_deg':>8}")
+    for i, (p, a) in enumerate(zip(r.joints, r.angles)):
+        print(f"{i:>5} {p[0] * 1e3:9.2f} {p[1] * 1e3:9.2f} {math.degrees(a):8.2f}")
+    if args.csv:
+        np.savetxt(args.csv, r.base * 1e3, delimiter=",", fmt="%.5f", header="x_mm,z_mm",
+                   comments="")
+        print(f"wrote {args.csv}")
+    if args.plot:
+        from design.array_plots import plot_result
+
+        print(f"wrote {plot_result(r, args.plot, fk, title=f'state {key}')}")
+    return 0 if r.status == "ok" else 1

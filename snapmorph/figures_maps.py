@@ -1,0 +1,81 @@
+"""Figure: the paper's parametric maps (Fig. "maps") from the committed design map.
+
+Rows: h/L vs t/L at w/L = 0.05, and h/L vs w/L at t/L = 0.005 (nearest grid slices).
+Columns: F_cr (in newtons for L = 100 mm, E = 2.2 GPa, as the paper plots it), S/L, theta.
+Monostable points are shaded grey, failed points hatched; the Table 1 specimens are marked
+(their b = w while the map has the parametric study's b = 0).
+"""
+
+import os
+
+import numpy as np
+
+SPECIMENS = [(9.11, 99.2, 0.5), (9.10, 99.0, 0.75), (19.24, 99.5, 0.5), (19.96, 99.7, 0.75),
+             (40.68, 99.4, 0.5), (39.85, 99.5, 0.75)]  # h, L, t in mm; w = 5 mm
+
+
+def _panel(ax, x, y, z, status, title, cmap, fmt):
+    import matplotlib.colors as mcolors
+
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    zz = np.where(status == 0, z, np.nan)
+    pc = ax.pcolormesh(X, Y, zz, shading="nearest", cmap=cmap)
+    grey = np.where(status == 1, 1.0, np.nan)
+    ax.pcolormesh(X, Y, grey, shading="nearest", cmap=mcolors.ListedColormap(["0.8"]))
+    bad = np.where(status >= 2, 1.0, np.nan)
+    if np.isfinite(bad).any():
+        ax.pcolor(X, Y, bad, hatch="xx", alpha=0.0, shading="nearest")
+    ok = np.isfinite(zz)
+    if ok.sum() > 4 and np.nanmax(zz) > np.nanmin(zz):
+        cs = ax.contour(X, Y, zz, levels=8, colors="k", linewidths=0.5)
+        ax.clabel(cs, fontsize=6, fmt=fmt)
+    ax.set_title(title, fontsize=9)
+    return pc
+
+
+def make(out, args=None):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from maps import DesignMap
+
+    dm = DesignMap.load(getattr(args, "map", None) if args is not None else None)
+    ds = dm.dataset
+    E, L = 2.2e9, 0.1
+    fig, axes = plt.subplots(2, 3, figsize=(15, 8.5))
+    rows = [("t_over_L", "w_over_L", 0.05), ("w_over_L", "t_over_L", 0.005)]
+    for row, (xname, fixed, value) in enumerate(rows):
+        sl = ds.sel({fixed: value}, method="nearest")
+        actual = float(sl[fixed])
+        sl = sl.transpose(xname, "h_over_L", ...)
+        x = sl[xname].values
+        y = sl["h_over_L"].values
+        status = sl["status"].values
+        t = sl["t_over_L"].values * L
+        w = sl["w_over_L"].values * L
+        if xname == "t_over_L":
+            I = (w * t[:, None] ** 3 / 12.0) * np.ones((len(x), len(y)))
+        else:
+            I = (w[:, None] * t**3 / 12.0) * np.ones((len(x), len(y)))
+        F = sl["F_cr"].values * E * I / L**2
+        panels = [(F, "F_cr (N), L = 100 mm, PETG", "viridis", "%.2g"),
+                  (sl["S"].values, "S / L", "viridis_r", "%.3f"),
+                  (sl["theta"].values, "theta (deg)", "magma", "%.0f")]
+        for col, (z, label, cmap, fmt) in enumerate(panels):
+            ax = axes[row, col]
+            pc = _panel(ax, x, y, z, status, f"{label} at {fixed.replace('_over_', '/')} = {actual:.3g}",
+                        cmap, fmt)
+            fig.colorbar(pc, ax=ax)
+            ax.set_xlabel(xname.replace("_over_", "/"))
+            ax.set_ylabel("h/L")
+            for h, Ls, ts in SPECIMENS:
+                xv = ts / Ls if xname == "t_over_L" else 5.0 / Ls
+                ax.plot(xv, h / Ls, "w^" if col else "r^", ms=6, mec="k")
+    fig.suptitle("Design maps (grey: monostable; triangles: Table 1 specimens, which have b = w)")
+    fig.tight_layout()
+    path = os.path.join(out, "design_maps.png")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return [path]

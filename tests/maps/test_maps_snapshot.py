@@ -1,0 +1,22 @@
+"""The committed CI snapshot: a valid map, and what the pipeline recomputes today (`make check-maps`)."""
+
+import pytest
+
+from maps import CI_MAP, DesignMap
+from snapmorph.cli import main
+
+
+def test_ci_snapshot_is_a_valid_map():
+    assert CI_MAP.is_file(), f"{CI_MAP} is missing: run `make maps-ci` and commit it"
+    dm = DesignMap.load(CI_MAP)
+    assert dm.attrs["grid"] == "ci"
+    ok = dm.dataset.status.values == 0
+    assert ok.sum() >= ok.size // 2
+
+
+@pytest.mark.slow
+def test_ci_snapshot_matches_a_fresh_build(capsys):
+    """Fails when the solver's results changed: regenerate with `make maps-ci` if intended."""
+    rc = main(["maps", "check", "--grid", "ci", "--against", str(CI_MAP), "--no-progress"])
+    out = capsys.readouterr().out
+    assert rc == 0, out

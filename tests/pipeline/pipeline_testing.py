@@ -1,0 +1,58 @@
+"""Helpers of the pipeline tests: the fake solver's expected output, subprocess environment."""
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parents[1]
+
+import fake_unit_solver as fake
+
+FAKE = "fake_unit_solver:solve"
+
+
+def subprocess_env(**extra) -> dict:
+    """Environment for subprocesses that must import the fake solver."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(HERE), str(REPO), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+    env.pop("FAKE_SOLVER_LOG", None)
+    env.pop("FAKE_SOLVER_DELAY", None)
+    env.update({k: str(v) for k, v in extra.items()})
+    return env
+
+
+def expected_record(h, t, w, samples):
+    """What the pipeline must store for one point of the fake solver."""
+    if fake._near((h, t, w), fake.RAISING_POINT) or fake._near((h, t, w), fake.NOT_CONVERGED_POINT):
+        return {"status": 2}
+    f = fake.fields(h, t, w)
+    if h < fake.boundary(t):
+        return {"status": 1, "F_cr": f["F_cr"], "d_cr": f["d_cr"]}
+    return {"status": 0, **f, "base_shape": fake.shape(h, t, w, samples)}
+
+
+def assert_matches_fake(ds):
+    """Every point of `ds` holds exactly what the fake solver computes there."""
+    samples = ds.sizes["sample"]
+    for i, h in enumerate(ds.h_over_L.values):
+        for j, t in enumerate(ds.t_over_L.values):
+            for k, w in enumerate(ds.w_over_L.values):
+                exp = expected_record(float(h), float(t), float(w), samples)
+                p = ds.isel(h_over_L=i, t_over_L=j, w_over_L=k)
+                assert int(p.status) == exp["status"], (h, t, w)
+                for name in ("F_cr", "d_cr", "d_unstable", "d_second", "S", "theta",
+                             "energy_barrier", "energy_stored"):
+                    got = float(p[name])
+                    if name in exp:
+                        assert got == pytest.approx(exp[name], rel=1e-12), (name, h, t, w)
+                    else:
+                        assert np.isnan(got), (name, h, t, w)
+                if exp["status"] == 0:
+                    np.testing.assert_allclose(p.base_shape.values, exp["base_shape"], rtol=0, atol=1e-12)
+                    assert int(p.bistable) == 1
+                else:
+                    assert np.all(np.isnan(p.base_shape.values))
+                    assert int(p.bistable) == 0
