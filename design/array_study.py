@@ -34,7 +34,7 @@ from design.arrays import (PETG_E, ArrayResult, _turn_deg, build_array, rigid_re
 from design.units import Unit
 
 __all__ = ["ArrayStudy", "all_array_states", "curve_deviation", "fk_released",
-           "paper_three_units", "released_shapes", "run_study", "table3_M_units"]
+           "paper_three_units", "released_shapes", "run_study", "shape_change", "table3_M_units"]
 
 T, W = 0.5e-3, 5e-3
 #: Table 3 of the paper, M: (L, h) mm of the four arched units, the 67.3 mm spacer between

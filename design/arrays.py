@@ -12,8 +12,9 @@ One base rod runs through every unit (solid 4w over each unit's end regions and 
 hollow 2w between); each arched unit adds its arch rod on its side, bonded to the base exactly as
 in the single unit: each unit is meshed by `solver.unit_model.build_unit` (same nodes, sections,
 ties, joint and support nodes as `solver.unit.simulate_unit`) and the meshes are joined end to
-end, sharing the base node at each junction. The first base edge is clamped; nothing else is held
-and there is no gravity.
+end, sharing the base node at each junction. One change: every bond joins coincident nodes
+(see `build_array`, ``coincident_ties``), so that no bond depends on a unit's orientation. The
+first base edge is clamped; nothing else is held and there is no gravity.
 
 Snapping unit i (the single-unit test, in the unit's own frame)
 ----------------------------------------------------------------
@@ -22,8 +23,8 @@ starts from the stress-free reference. The energy of a DER model does not change
 motion, so the current state is moved rigidly into unit i's frame (origin at its left support
 node, x along the line of its two support nodes); there the single-unit test applies as it is:
 rollers (z held) at the two support nodes, the actuator joint made rigid, the apex held in x and
-its displacement towards the base prescribed step by step (displacement control by Newton,
-`Structure.solve_equilibrium`, from the current deformed state). The clamp is removed during the
+its displacement towards the base prescribed step by step (displacement control by Newton on
+the structure's `reduced_system`, from the current deformed state). The clamp is removed during the
 push: the two rollers and the apex are then a statically determinate support of the whole array,
 the actuator's force is carried by unit i's two rollers only, and the rest of the array, loaded
 by nothing, follows as a rigid body. The actuator is self-equilibrated: the reactions are
@@ -32,6 +33,11 @@ on is solved at zero force (as `simulate_unit` does); then the array is moved ri
 clamped edge is where it was, the actuator and rollers are removed and the free equilibrium with
 the clamp only is solved. Its stability (no negative eigenvalue) and that the unit stayed snapped
 are checked.
+
+Why the conjecture holds here: in a released state no external load acts (the clamp carries
+nothing), so a cut through the base between two units transmits no force and no moment; each unit
+then obeys the equations of the same unit alone and free, and the array is the concatenation of
+released units, in any snapping order. `design.array_study` measures it (1e-12 of the length).
 
 Everything is SI (m, N, Pa).
 """

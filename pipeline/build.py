@@ -75,6 +75,9 @@ class BuildReport:
                          f"(fan-out only {self.fanout_overhead:.3f})")
         for h, t, w, status, msg in self.failures:
             lines.append(f"  {STATUS_CODES[status]} at h/L={h:g}, t/L={t:g}, w/L={w:g}: {msg}")
+        n_failed = sum(v for k, v in self.status_counts.items() if k >= NOT_CONVERGED)
+        if n_failed > len(self.failures):
+            lines.append(f"  ... and {n_failed - len(self.failures)} more failed points (status in the map)")
         return "\n".join(lines)
 
 
@@ -172,9 +175,9 @@ def build_map(grid: Grid, out, *, solve=solve_point, warm=_DEFAULT, scheduler=No
     if batch_size is not None and (isinstance(batch_size, bool) or not isinstance(batch_size, int)
                                    or batch_size < 1):
         raise ValueError(f"batch_size must be an integer >= 1, got {batch_size!r}")
-    resolve_solver(solve)  # fail now, not on the workers, if it does not resolve
+    fn = resolve_solver(solve)  # fail now, not on the workers, if it does not resolve
     if warm is _DEFAULT:
-        warm = warm_up if solve is solve_point else None
+        warm = warm_up if fn is solve_point else None
     out = Path(out)
     n_points, samples = grid.size, grid.samples
     coords = grid.points()

@@ -23,11 +23,11 @@ _RANGES = {
 #: solver resolution (`nodes` of `solver.unit.simulate_unit`) of a Grid unless given;
 #: None = the solver's converged default, resolved and recorded when a build starts
 PRESET_RESOLUTION = None
-#: resolution of the `default` preset. Measured (pipeline.accuracy, 200 random points): at the
-#: solver's default of 81 nodes the solver's own results are not smooth in t/L and w/L (theta
-#: 18 deg off its converged value at t/L = 0.0025), so interpolation misses the targets
-#: (theta 1.7 deg, F_cr 3.1 %); at 161 nodes the same grid gives theta 0.25 deg, S 0.08 %,
-#: F_cr 1.4 %.
+#: resolution of the `default` preset, chosen by measurement (pipeline.accuracy, 200 random
+#: off-grid points, solver of commit b6c2576 + working tree at 17:45 UTC): at the solver's
+#: default of 101 nodes, F_cr has mesh-alignment dips of ~3 % between w/L = 0.02 and 0.03, so
+#: interpolated F_cr misses its 2 % target there (max 2.8 %; theta 0.06 deg, S 0.06 %); at
+#: 161 nodes every target is met (theta 0.19 deg, S 0.06 %, F_cr 1.3 %) for ~2.2x the time.
 DEFAULT_MAP_RESOLUTION = 161
 MIN_RESOLUTION = 5
 

@@ -174,9 +174,12 @@ def build_unit(
     # at x0, and the base edge across x0 is solid over its first half, hollow over its second.
     half_edge = 0.5 * min(spacing, 0.5 * x0, 0.25 * g.arch_span)
     if abs(sup - x0) < half_edge * (1 + 1e-9):
-        # a roller exactly at the junction would sit inside the straddling edge: move it to
-        # the bonded side (an O(h) shift; only where 0.03 L and b + w nearly coincide)
-        sup = x0 - half_edge
+        # The roller would sit inside the edge that straddles x0: shorten that edge so that
+        # the roller stays at 0.03 L, down to a tenth of the spacing; closer than that the
+        # roller moves to the bonded node (a shift below spacing / 20).
+        half_edge = max(0.5 * abs(sup - x0), 0.05 * spacing)
+        if abs(sup - x0) < half_edge * (1 + 1e-9):
+            sup = x0 - half_edge
     bond_end = x0 - half_edge
     breaks = np.array([0.0, sup, bond_end, x0 + half_edge, 0.5 * L, L - x0 - half_edge,
                        L - bond_end, L - sup, L])

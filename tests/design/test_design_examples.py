@@ -61,12 +61,15 @@ def _committed_map():
 
 
 @pytest.mark.slow
-def test_examples_on_the_committed_map(tmp_path):
+def test_examples_on_the_committed_map():
+    """On the real map: the S of circular segments is matched within 1 %; the M within 5 % by
+    the biarc design, and better after the least-squares refinement."""
     dm = _committed_map()
-    s = load("design_S").run(dm)
-    assert s.max_deviation < 0.01
+    assert load("design_S").run(dm).max_deviation < 0.01
     m = load("design_M").run(dm, "auto")
-    assert m.max_deviation < 0.02
+    assert m.max_deviation < 0.05
+    r = load("design_M").run(dm, "paper", refine=True)
+    assert r.refinement["rms_after"] < r.refinement["rms_before"]
     states = load("three_units_fk").run(dm)
     assert len(states) == 8
 

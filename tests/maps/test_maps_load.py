@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-import xarray as xr
 
 import maps.designmap as designmap
 from maps_synthetic import synthetic_dataset

@@ -1,0 +1,99 @@
+"""Single equilibrium states under a prescribed displacement of one node.
+
+Used to pin down the special states of a path exactly — the force maximum (a limit point
+under load control is a regular point under displacement control) and zero-force states
+when a load-controlled Newton from a rough guess would wander off to another equilibrium.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from solver.continuation import TOL_DISP, ConvergenceError, _newton, _scales, make_control
+
+
+class DisplacementProbe:
+    """Equilibria of ``structure`` with ``node``'s displacement along an axis-aligned
+    ``direction`` prescribed; every other constraint kept. Forces in N, lengths in m."""
+
+    def __init__(self, structure, node, direction=(0.0, -1.0), tol=1e-9, max_iter=30):
+        self.structure = structure
+        self.control = make_control(structure, node, direction, 1.0, "displacement")
+        self.system = structure.reduced_system(extra_fixed=[(self.control.node, self.control.axis)])
+        self.length, self.fscale = _scales(structure)
+        self.X = structure.reference_positions
+        self.tol = tol
+        self.max_iter = max_iter
+
+    def solve(self, guess, d):
+        """Equilibrium at displacement ``d`` (m) from ``guess`` (n_nodes, 2).
+
+        Returns (positions, force along the direction, negative eigenvalues with the
+        displacement held). Raises ConvergenceError."""
+        c = self.control
+        q = np.array(guess, dtype=float).reshape(-1)
+        sign = c.direction[c.axis]
+        for m in c.members:
+            q[2 * m + c.axis] = self.X[m, c.axis] + sign * d
+        it = _newton(self.system, q, 0.0, None, self.tol * self.fscale, TOL_DISP * self.length,
+                     self.max_iter, 0.25 * self.length)
+        if it < 0:
+            raise ConvergenceError(f"no equilibrium found at prescribed d = {d:.6g} m")
+        g = self.system.grad_full.reshape(-1, 2)[c.members].sum(axis=0)
+        return q.reshape(-1, 2), float(c.direction @ g), self.system.negative_eigenvalues
+
+
+def refine_maximum(probe, d, F, positions, i, tol_d=None):
+    """Maximum of F(d) near path sample ``i`` (a local maximum of F): golden-section search
+    on d in [d[i-1], d[i+1]] with displacement-controlled solves. Returns (F_max, d_max)."""
+    a, b = float(d[i - 1]), float(d[i + 1])
+    if not a < b:
+        raise ConvergenceError("the path is not monotone in d around the maximum")
+    tol_d = (b - a) * 1e-4 if tol_d is None else tol_d
+    cache = {}
+
+    def f(x):
+        if x not in cache:
+            # start from the nearest sample: a predictor that cannot jump branches
+            j = i - 1 + int(np.argmin(np.abs(np.asarray(d[i - 1:i + 2]) - x)))
+            cache[x] = probe.solve(positions[j], x)[1]
+        return cache[x]
+
+    invphi = (np.sqrt(5.0) - 1.0) / 2.0
+    x1 = b - invphi * (b - a)
+    x2 = a + invphi * (b - a)
+    f1, f2 = f(x1), f(x2)
+    while b - a > tol_d:
+        if f1 > f2:
+            b, x2, f2 = x2, x1, f1
+            x1 = b - invphi * (b - a)
+            f1 = f(x1)
+        else:
+            a, x1, f1 = x1, x2, f2
+            x2 = a + invphi * (b - a)
+            f2 = f(x2)
+    x = 0.5 * (a + b)
+    return f(x), x
+
+
+def zero_force_displacement(probe, d0, d1, pos0, pos1, F0, F1, tol_F, max_steps=40):
+    """Displacement in [d0, d1] where F changes sign, by safeguarded secant (regula falsi,
+    Illinois) on displacement-controlled solves. Returns (d, positions)."""
+    if not F0 * F1 <= 0.0:
+        raise ConvergenceError("the bracket does not contain a zero of the force")
+    a, b, fa, fb = d0, d1, F0, F1
+    pa, pb = pos0, pos1
+    side = 0
+    for _ in range(max_steps):
+        x = b - fb * (b - a) / (fb - fa)
+        p, fx, _ = probe.solve(pa if abs(x - a) < abs(x - b) else pb, x)
+        if abs(fx) <= tol_F:
+            return x, p
+        if fx * fb < 0:
+            a, fa, pa = b, fb, pb
+            side = 0
+        else:
+            fa *= 0.5 if side == 1 else 1.0
+            side = 1
+        b, fb, pb = x, fx, p
+    raise ConvergenceError("the zero-force state was not located")
