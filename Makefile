@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed-stamp
 JOBS   ?=
 
 .DEFAULT_GOAL := help
-.PHONY: help venv test test-fast bench maps maps-ci check-maps figures coverage clean
+.PHONY: help venv test test-fast bench maps maps-ci maps-accuracy check-maps figures coverage clean
 
 help:  ## list the targets
 	@echo "snapmorph make targets:"
@@ -37,6 +37,9 @@ maps-ci: $(STAMP)  ## rebuild the small CI grid into maps/data/ci.nc
 
 check-maps: $(STAMP)  ## recompute the CI grid and compare it with the committed snapshot
 	$(PY) -m snapmorph maps check --grid ci --against maps/data/ci.nc
+
+maps-accuracy: $(STAMP)  ## interpolated map values against direct simulation at random off-grid points
+	$(PY) -m pipeline.accuracy --map maps/data/default.nc --n 50
 
 figures: $(STAMP)  ## write the paper's figures into figures/
 	$(PY) -m snapmorph figures --out figures

@@ -18,11 +18,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from solver.branching import BranchMonitor, PathState
+from solver.stability import held_count
+
 
 # Newton has converged when the residual is below tol x the force scale, or when the last
 # correction moved no DOF by more than this fraction of the structure's size (the residual of
 # very stiff stretching terms cannot drop below round-off, positions can).
 TOL_DISP = 1e-11
+
+# A step across which the stability count changes while the path keeps its direction is
+# retried smaller down to this fraction of the first step: a bifurcation persists however
+# small the step, a fold of the path that a long step jumped over does not.
+CROSSING_REFINE = 1.0 / 256.0
 
 
 class ConvergenceError(RuntimeError):
@@ -50,7 +58,9 @@ class Path:
     positions: (K, n_nodes, 2) m; status: "ok" or why the path stopped early;
     negative_eigenvalues: (K,) of the tangent stiffness under the path's own control
     (force control for "mgdc", the node's displacement held for "displacement");
-    negative_eigenvalues_displacement: (K,) the same with the pushed displacement held.
+    negative_eigenvalues_displacement: (K,) the same with the pushed displacement held;
+    critical_points: `solver.stability.CriticalPoint` records (limit points and
+    bifurcations met, in path order; empty when the push ran with ``critical=False``).
     """
 
     displacement: np.ndarray
@@ -63,11 +73,27 @@ class Path:
     negative_eigenvalues: np.ndarray
     negative_eigenvalues_displacement: np.ndarray
     info: dict = field(default_factory=dict)
+    critical_points: list = field(default_factory=list)
 
     @property
     def stable(self) -> np.ndarray:
         """(K,) bool: stable under the path's own control (no negative eigenvalue)."""
         return self.negative_eigenvalues == 0
+
+    @property
+    def stable_displacement(self) -> np.ndarray:
+        """(K,) bool: stable with the pushed displacement held."""
+        return self.negative_eigenvalues_displacement == 0
+
+    @property
+    def bifurcations(self) -> list:
+        """The critical points where another branch crosses the path."""
+        return [c for c in self.critical_points if c.kind == "bifurcation"]
+
+    @property
+    def limit_points(self) -> list:
+        """The critical points where F (control "force") or d ("displacement") turns."""
+        return [c for c in self.critical_points if c.kind == "limit"]
 
     def __len__(self):
         return len(self.displacement)
@@ -147,7 +173,7 @@ class _Recorder:
         for k, v in zip(self.rows, (d, F, q.copy(), E, it, neg, negd)):
             self.rows[k].append(v)
 
-    def path(self, n_nodes, status, method, info):
+    def path(self, n_nodes, status, method, info, critical_points=()):
         r = self.rows
         return Path(
             displacement=np.array(r["d"], dtype=float),
@@ -160,6 +186,7 @@ class _Recorder:
             negative_eigenvalues=np.array(r["neg"], dtype=np.int64),
             negative_eigenvalues_displacement=np.array(r["negd"], dtype=np.int64),
             info=info,
+            critical_points=list(critical_points),
         )
 
 
@@ -231,13 +258,22 @@ def follow_displacement(
     max_iter=25,
     max_steps=20000,
     stop=None,
+    branch="follow",
+    critical=True,
+    switch_size=0.5,
+    max_switches=8,
 ):
     """Prescribe the node's displacement along an axis from 0 to ``control.distance``.
 
     ``steps``: initial number of equal steps; steps are halved on failure and grow back
     (up to ``max_step`` m) when Newton converges quickly. ``stop(path_arrays)`` may end
     the path early (it receives the recorder's dict of lists).
+    ``critical``: detect, classify and locate critical points (`solver.branching`);
+    ``branch``: at a bifurcation, "follow" the branch a push rig follows (leave along
+    the critical mode) or stay on the "primary" one; ``switch_size``: the perturbation
+    as a fraction of the first step (distance / steps); at most ``max_switches`` switches.
     """
+    _check_branch(branch)
     X = structure.reference_positions
     axis = control.axis
     system = structure.reduced_system(extra_fixed=[(control.node, axis)])
@@ -247,6 +283,13 @@ def follow_displacement(
     system.evaluate(q)
     system.factor()
     rec.add(0.0, 0.0, q, system.energy, 0, system.negative_eigenvalues, system.negative_eigenvalues)
+    monitor = None
+    if critical:
+        monitor = BranchMonitor(structure, control, branch, tol, fscale, length,
+                                nominal_step=control.distance / max(int(steps), 1),
+                                switch_size=switch_size, max_switches=max_switches)
+        monitor.start(PathState(q.copy(), 0.0, 0.0, -1, system.negative_eigenvalues, 0.0, 1.0,
+                                system.energy))
     dd0 = control.distance / max(int(steps), 1)
     dd_max = dd0 if max_step is None else float(max_step)
     dd = dd0
@@ -268,6 +311,10 @@ def follow_displacement(
             q_try[2 * m + axis] = X[m, axis] + sign * target
         fmax = max(fscale, abs(rec.rows["F"][-1]))
         it = _newton(system, q_try, 0.0, None, tol * fmax, TOL_DISP * length, max_iter, 0.25 * length)
+        if (it >= 0 and monitor is not None and step > CROSSING_REFINE * dd0
+                and monitor.suspicious(system.negative_eigenvalues, 1.0)):
+            dd = step / 2  # refine a step across which the count changes
+            continue
         if it < 0:
             dd = step / 2
             if dd < min_step_ratio * dd0:
@@ -281,13 +328,32 @@ def follow_displacement(
         q, d = q_try, target
         F = _node_force(system, control)
         neg = system.negative_eigenvalues
-        rec.add(d, F, q, system.energy, it, neg, neg)
+        iterations = it
+        if monitor is not None:
+            new = PathState(q.copy(), F, d, -1, neg, 0.0, 1.0, system.energy)
+            reroute = monitor.observe(new, len(rec.rows["d"]) - 1)
+            if reroute is not None:
+                c = reroute.critical
+                rec.add(c.d, c.lam, c.q, c.energy, 0, c.neg_disp, c.neg_disp)
+                # continue from the first state on the new branch; the next predictor
+                # extrapolates along the branch's tangent dq/dd there
+                q, d, iterations = reroute.state.q.copy(), reroute.state.d, 0
+                dd = max(dd, dd0)  # steps were refined onto the point: start afresh
+                q_prev, d_prev = None, d
+                if reroute.rate is not None:
+                    q_prev, d_prev = q - reroute.rate * dd, d - dd
+                system.evaluate(q)
+                system.factor()
+                F = _node_force(system, control)
+                neg = system.negative_eigenvalues
+        rec.add(d, F, q, system.energy, iterations, neg, neg)
         if it <= 3:
             dd = min(1.5 * dd, dd_max)
         if stop is not None and stop(rec.rows):
             break
     info = {"wall_time": time.perf_counter() - t0, "bandwidth": system.bandwidth, "n_dofs": system.n}
-    return rec.path(structure.n_nodes, status, "displacement", info)
+    return rec.path(structure.n_nodes, status, "displacement", _monitor_info(info, monitor),
+                    monitor.points if monitor is not None else ())
 
 
 # ---------------------------------------------------------------------- MGDC
@@ -303,6 +369,10 @@ def follow_mgdc(
     max_steps=20000,
     stop=None,
     min_step_ratio=1e-7,
+    branch="follow",
+    critical=True,
+    switch_size=0.5,
+    max_switches=8,
 ):
     """Load-controlled path with MGDC until the node's displacement reaches
     ``control.distance``.
@@ -312,7 +382,10 @@ def follow_mgdc(
     default 8 x the first's); a step that needs more than ``max_accept_iter`` iterations
     is retried at half the size.
     ``stop(path_arrays)`` may end the path early.
+    ``critical``, ``branch``, ``switch_size``, ``max_switches``: as for
+    `follow_displacement` (critical points and branch switching).
     """
+    _check_branch(branch)
     X = structure.reference_positions
     system = structure.reduced_system()
     length, fscale = _scales(structure)
@@ -343,6 +416,13 @@ def follow_mgdc(
     # the first step moves the node by a quarter of distance / steps (the path may bend
     # sharply at once); steps then grow up to four times that, i.e. about distance / steps
     s0 = 0.25 * dd0 * np.linalg.norm(uP) / flex
+    monitor = None
+    if critical:
+        monitor = BranchMonitor(structure, control, branch, tol, fscale, length, s0,
+                                system=system, switch_size=switch_size,
+                                max_switches=max_switches)
+        neg0 = system.negative_eigenvalues
+        monitor.start(PathState(q.copy(), 0.0, 0.0, neg0, neg0, 1.0, 1.0, system.energy))
     s = s0
     s_max = 8.0 * s0 if max_step is None else float(max_step)
     sign = 1.0
@@ -396,6 +476,10 @@ def follow_mgdc(
             # Too many iterations also means the predictor overshot a strongly curved path.
             if converged and (np.linalg.norm(q_try - q) > 4.0 * s or it > max_accept_iter):
                 converged = False
+            uP_try = None
+            if converged and monitor is not None and s > CROSSING_REFINE * s0:
+                uP_try = system.solve(P)
+                converged = not _mgdc_crosses(system, uP_try, node_component, monitor, q, q_try)
             if not converged:
                 rejected += 1
                 s *= 0.5
@@ -413,13 +497,30 @@ def follow_mgdc(
         # accepted: the system holds K at q_try
         step_prev = system.reduced(q_try) - system.reduced(q)
         q, lam = q_try, lam_try
-        uP = system.solve(P)
+        uP = system.solve(P) if uP_try is None else uP_try
         d = _node_displacement(q, X, control)
         neg = system.negative_eigenvalues
         # Schur complement: dF/dd of the pushed node is 1 / (n . u_P); a negative one
         # accounts for one negative eigenvalue that holding the displacement removes.
-        negd = neg - (1 if node_component(uP) < 0 else 0)
-        rec.add(d, lam, q, system.energy, it, neg, max(negd, 0))
+        flex = node_component(uP)
+        negd = held_count(neg, flex)
+        energy, iterations = system.energy, it
+        if monitor is not None:
+            # direction of travel at the new state: along +-u_P, oriented like the last step
+            orient = 1.0 if float(uP @ step_prev) >= 0.0 else -1.0
+            new = PathState(q.copy(), lam, d, neg, negd, orient,
+                            orient * (1.0 if flex >= 0.0 else -1.0), energy)
+            reroute = monitor.observe(new, len(rec.rows["d"]) - 1)
+            if reroute is not None:
+                c, s_new = reroute.critical, reroute.state
+                rec.add(c.d, c.lam, c.q, c.energy, 0, c.neg_force, c.neg_disp)
+                # the monitor left the system factorised at the first state of the new branch
+                q, lam, step_prev = s_new.q.copy(), s_new.lam, reroute.step
+                uP = system.solve(P)
+                s = max(s, s0)  # steps were refined onto the point: start afresh
+                d, neg, negd = s_new.d, s_new.neg_force, s_new.neg_disp
+                energy, iterations = s_new.energy, 0
+        rec.add(d, lam, q, energy, iterations, neg, negd)
         if it <= target_iterations - 1:
             s = min(1.5 * s, s_max)
         elif it >= target_iterations + 3:
@@ -437,4 +538,29 @@ def follow_mgdc(
         "rejected_steps": rejected,
         "total_iterations": total_iterations,
     }
-    return rec.path(structure.n_nodes, status, "mgdc", info)
+    return rec.path(structure.n_nodes, status, "mgdc", _monitor_info(info, monitor),
+                    monitor.points if monitor is not None else ())
+
+
+def _mgdc_crosses(system, uP, node_component, monitor, q, q_try):
+    """Would the converged MGDC trial state q_try (tangent ``uP = K^-1 P`` there) put a
+    bifurcation or a jumped fold between itself and q (see CROSSING_REFINE)?"""
+    flex = node_component(uP)
+    step = system.reduced(q_try) - system.reduced(q)
+    orient = 1.0 if float(uP @ step) >= 0.0 else -1.0
+    return monitor.suspicious(held_count(system.negative_eigenvalues, flex),
+                              orient * (1.0 if flex >= 0.0 else -1.0))
+
+
+def _check_branch(branch):
+    if branch not in ("follow", "primary"):
+        raise ValueError(f"branch must be 'follow' or 'primary'; got {branch!r}")
+
+
+def _monitor_info(info, monitor):
+    """Add the critical-point bookkeeping to a path's info dict."""
+    if monitor is not None:
+        info["branch"] = monitor.branch
+        info["branch_switches"] = monitor.switches
+        info["critical_seconds"] = monitor.seconds
+    return info

@@ -7,6 +7,9 @@
 The apex is pushed down with MGDC from d = 0 until the force has crossed zero twice; the
 unstable state (ii) and the second stable state (iii) are then solved exactly at F = 0 by
 Newton from the bracketing path states, and S, theta and the base shape come from (iii).
+The path is the one a displacement-controlled rig makes the unit follow: where another
+equilibrium branch crosses it (a bifurcation), the push leaves along the critical mode
+(`solver.branching`); ``bifurcation`` records whether that happened before snap-through.
 Energies are the elastic energies of the exact states, which equal the work of F along the
 path (the supports do no work), i.e. the integrals of F dd. SI units throughout.
 """
@@ -20,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from solver.continuation import ConvergenceError
+from solver.stability import state_stability
 from solver.unit_model import DEFAULT_NODES, UnitGeometry, UnitModel, build_unit
 
 __all__ = ["UnitGeometry", "UnitResult", "simulate_unit", "STATUS_CODES"]
@@ -75,13 +79,25 @@ def simulate_unit(
     tie_stiffness: float | None = None,
     check_self_standing: bool = True,
     steps: int = 60,
+    branch: str = "follow",
+    critical: bool = True,
 ) -> UnitResult:
     """Simulate the push test of one unit and extract F_cr, S, theta and the shapes.
 
     ``nodes``: resolution (about the number of base nodes; None = the converged default);
     ``method``: "mgdc" (load control, the paper's) or "displacement";
-    ``tie``: "exact" or "spring" bonds; ``steps``: first-step size as a fraction of 3 h.
+    ``tie``: "exact" or "spring" bonds; ``steps``: first-step size as a fraction of 3 h;
+    ``branch``: at a bifurcation "follow" the branch the unit takes (default) or stay on the
+    "primary" (symmetric) path; ``critical``: detect critical points and report stability
+    (False: the bare path, no ``bifurcation`` flag and no per-state stability).
     Never raises for a geometry that can be built: failures come back in ``status``.
+
+    ``stability`` holds, besides the per-step counts, ``critical_points`` (the path's
+    `solver.stability.CriticalPoint` records) and ``states``: {"i", "ii", "iii"} ->
+    `solver.stability.StateStability` (negative eigenvalues under force and displacement
+    control; (i) is a force maximum, i.e. marginal under force control).
+    ``bifurcation``: True when the path met a bifurcation before the force peak F_cr
+    (before snap-through), False when not, None when ``critical`` is False.
     """
     if not isinstance(g, UnitGeometry):
         raise ValueError(f"g must be a UnitGeometry; got {type(g).__name__}")
@@ -93,7 +109,8 @@ def simulate_unit(
                           shapes={"i": {"base": straight}}, solve_time=0.0)
     model = build_unit(g, nodes=nodes, tie=tie, tie_stiffness=tie_stiffness)
     try:
-        result = _simulate(g, model, method, steps, check_self_standing, nodes, tie, tie_stiffness)
+        push = dict(method=method, steps=steps, branch=branch, critical=critical)
+        result = _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness)
     except ConvergenceError as exc:
         result = UnitResult(g, f"not converged: {exc}")
     except (FloatingPointError, np.linalg.LinAlgError) as exc:
@@ -110,17 +127,21 @@ def _stop_after_second_crossing(rows):
     return bool(np.any(np.asarray(F[:-1]) < 0.0))
 
 
-def _simulate(g, model, method, steps, check_self_standing, nodes, tie, tie_stiffness):
+def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness):
     st = model.structure
     distance = 3.0 * g.h
-    path = st.push(model.apex, (0.0, -1.0), distance, method=method, steps=steps,
-                   stop=_stop_after_second_crossing)
+    path = st.push(model.apex, (0.0, -1.0), distance, stop=_stop_after_second_crossing, **push)
     d, F = path.displacement, path.force
     result = UnitResult(g, "ok", curve=(d.copy(), F.copy()))
     result.stability = {
         "negative_eigenvalues": path.negative_eigenvalues.copy(),
         "negative_eigenvalues_displacement": path.negative_eigenvalues_displacement.copy(),
     }
+    critical = push["critical"]
+    if critical:
+        result.stability["critical_points"] = list(path.critical_points)
+        result.stability["states"] = {}
+        force_system = st.reduced_system()
     arch, base = model.arch_nodes, model.base_nodes
 
     def shape(pos):
@@ -130,6 +151,12 @@ def _simulate(g, model, method, steps, check_self_standing, nodes, tie, tie_stif
     if i_pk is not None:
         result.F_cr, result.d_cr = _refine_peak(d, F, i_pk)
         result.shapes["i"] = shape(path.positions[i_pk])
+    if critical:
+        d_snap = result.d_cr if i_pk is not None else np.inf
+        result.bifurcation = any(c.d <= d_snap for c in path.bifurcations)
+        if i_pk is not None:
+            result.stability["states"]["i"] = _state_stability(st, model, path.positions[i_pk],
+                                                               force_system)
     j = _first_crossing(F, start=(i_pk or 0), downward=True)
     k = _first_crossing(F, start=j, downward=False) if j is not None else None
     if k is None:
@@ -159,9 +186,21 @@ def _simulate(g, model, method, steps, check_self_standing, nodes, tie, tie_stif
     result.energy_stored = st.energy(pos_iii)
     result.shapes["ii"] = shape(pos_ii)
     result.shapes["iii"] = shape(pos_iii)
+    if critical:
+        result.stability["states"]["ii"] = _state_stability(st, model, pos_ii, force_system)
+        result.stability["states"]["iii"] = _state_stability(st, model, pos_iii, force_system)
     if check_self_standing:
         result.self_standing = _self_standing(g, model, pos_iii, nodes, tie, tie_stiffness)
     return result
+
+
+def _state_stability(st, model, positions, system):
+    """Negative-eigenvalue counts of a state with the apex loaded (force control) and held
+    (displacement control); None when the state is exactly critical."""
+    try:
+        return state_stability(st, positions, model.apex, (0.0, -1.0), system=system)
+    except ValueError:
+        return None
 
 
 def _first_peak(F):

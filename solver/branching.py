@@ -1,0 +1,493 @@
+"""Critical points along a path and branch switching.
+
+`BranchMonitor` watches a path follower step by step. Between two converged states it
+compares the stability counts (`solver.stability`) and the direction of travel:
+
+- the force F turns (dF/ds changes sign): a limit point under force control;
+- the displacement d turns together with a change of ``n_d`` (the negative eigenvalues with
+  the pushed displacement held): a limit point under displacement control (snap-back);
+- ``n_d`` changes while d keeps going: a bifurcation — another equilibrium branch crosses
+  (its mode does not move the load, so both stiffnesses are singular there). The drivers
+  first retry such a step smaller (`solver.continuation.CROSSING_REFINE`): a fold of the
+  path that a long step jumped over (an imperfect structure) then shows as limit points;
+- d turns while ``(-1)^n_d`` does not flip with it: the sign of the determinant of K
+  bordered with the path tangent, ``(-1)^n_d sign(dd/ds)``, has flipped, which happens at
+  bifurcation points only — the path ran through one along a branch that turns there (a
+  secondary branch that rejoins the primary one, say).
+
+A bifurcation is located on the step by regula falsi (Illinois) on a scale-free test
+function: ``f = ± (det K_d(tau) / det K_d(0))^(1/m)`` for m crossing eigenvalues (sign read
+off the count; ``det K_d ∝ det K · P^T K^-1 P``, so one LDL^T gives both), or the bordered
+determinant for a branch through the point. Each evaluation is an equilibrium on the
+hyperplane through the linear interpolation of the two step ends.
+
+With ``branch="follow"`` the path then leaves along the other branch through the point:
+at the point the equilibrium tangents span ``(phi, 0)`` (the critical mode) and ``(v, 1)``
+(``K v = P``, ``v ⟂ phi``); the new direction is the one of that plane orthogonal to the
+direction of arrival, and of its two senses the one that increases d is taken (a push rig
+advances) — for a symmetric pitchfork both are mirror images and ``+phi`` is taken. The
+first state on the new branch is solved on the hyperplane a distance ``eps`` beyond the
+point, ``eps = switch_size x`` the driver's first step (a displacement norm).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from solver.banded import ldlt_factor, ldlt_solve
+from solver.stability import CriticalPoint, critical_modes, expand_mode, held_count
+
+BRANCHES = ("follow", "primary")
+
+
+@dataclass
+class PathState:
+    """One converged state of a path, as the monitor sees it.
+
+    q: (2 n_nodes,) flat positions, m; lam: force on the pushed node along its direction, N;
+    d: its displacement along the direction, m; neg_force/neg_disp: negative eigenvalues
+    under force / displacement control (-1: unknown); dir_force/dir_disp: +1 or -1 when F / d
+    grows along the direction of travel at this state, 0 when unknown.
+    """
+
+    q: np.ndarray
+    lam: float
+    d: float
+    neg_force: int
+    neg_disp: int
+    dir_force: float = 0.0
+    dir_disp: float = 1.0
+    energy: float = float("nan")
+
+
+@dataclass
+class Reroute:
+    """The path leaves its branch: the bifurcation point and the first state beyond it, both
+    path rows; ``step`` is the reduced increment between them (orients the next step);
+    ``rate``: dq/dd (flat, 1) along the new branch at its first state, the predictor of a
+    displacement-controlled step (None where d turns)."""
+
+    critical: PathState
+    state: PathState
+    step: np.ndarray
+    rate: np.ndarray | None = None
+
+
+class BranchMonitor:
+    """Detects, classifies and locates critical points; switches branches (see module doc).
+
+    ``structure``/``control``: the push; ``branch``: "follow" or "primary";
+    ``fscale`` (N) and ``length`` (m): the structure's scales for the Newton tolerances;
+    ``system``: the force-control `ReducedSystem` to share (MGDC), else one is built when
+    first needed; ``nominal_step`` (m): the driver's first-step size, displacement norm;
+    ``switch_size``: the perturbation as a fraction of it.
+    """
+
+    def __init__(self, structure, control, branch, tol, fscale, length, nominal_step,
+                 system=None, switch_size=0.5, max_switches=8, max_iter=25):
+        if branch not in BRANCHES:
+            raise ValueError(f"branch must be one of {BRANCHES}; got {branch!r}")
+        self.structure = structure
+        self.control = control
+        self.branch = branch
+        self.tol = tol
+        self.fscale = fscale
+        self.length = length
+        self.switch_size = float(switch_size)
+        self.nominal_step = float(nominal_step)
+        self.max_switches = int(max_switches)
+        self.max_iter = int(max_iter)
+        self._system = system
+        self._P = None
+        self.points: list[CriticalPoint] = []
+        self.history: list[PathState] = []
+        self.switches = 0
+        self.seconds = 0.0  # time spent locating and switching
+
+    # ------------------------------------------------------------------ set-up
+    @property
+    def system(self):
+        if self._system is None:
+            self._system = self.structure.reduced_system()
+        return self._system
+
+    @property
+    def P(self):
+        if self._P is None:
+            from solver.continuation import _load_vector
+
+            self._P = _load_vector(self.system, self.control)
+        return self._P
+
+    def start(self, state: PathState):
+        self.history = [state]
+
+    # ------------------------------------------------------------------ per step
+    def suspicious(self, neg_disp, dir_disp) -> bool:
+        """Would a state with these values put a bifurcation (or a fold that a long step
+        jumped over) between itself and the last state? See `_classify`."""
+        return _classify(self.history[-1], neg_disp, dir_disp)[1] is not None
+
+    def observe(self, new: PathState, index: int) -> Reroute | None:
+        """Compare ``new`` with the last state (path row ``index``); record what lies between.
+
+        Returns a `Reroute` when the path should continue on another branch."""
+        prev = self.history[-1]
+        if new.dir_force == 0.0:  # read off the sequence (displacement control)
+            new.dir_force = float(np.sign(new.lam - prev.lam))
+        if prev.dir_force * new.dir_force < 0.0:
+            self._record_limit("force", index, new)
+        limit, crossing = _classify(prev, new.neg_disp, new.dir_disp)
+        if limit:
+            self._record_limit("displacement", index, new)
+        reroute = None
+        if crossing is not None:
+            t0 = time.perf_counter()
+            reroute = self._bifurcation(prev, new, crossing, index)
+            self.seconds += time.perf_counter() - t0
+        if reroute is None:
+            self.history = self.history[-1:] + [new]
+        else:
+            self.history = [reroute.critical, reroute.state]
+        return reroute
+
+    def _record_limit(self, control, index, new):
+        """A limit point of F (or of d) near the last states: the vertex of the parabola
+        through the last three states (no extra solves)."""
+        states = (self.history + [new])[-3:]
+        d = np.array([s.d for s in states])
+        F = np.array([s.lam for s in states])
+        x, y = (d, F) if control == "force" else (F, d)  # y turns as x goes on
+        rising = (states[-2].dir_force if control == "force" else states[-2].dir_disp) > 0
+        k = int(np.argmax(y) if rising else np.argmin(y))
+        xv, yv = x[k], y[k]
+        if len(x) == 3 and (np.all(np.diff(x) > 0) or np.all(np.diff(x) < 0)):
+            a, b, c = np.polyfit(x - x[1], y, 2)
+            xr = x[1] - b / (2 * a) if a != 0.0 else np.inf
+            if x.min() <= xr <= x.max():
+                xv, yv = xr, c - b * b / (4 * a)
+        d_v, F_v = (xv, yv) if control == "force" else (yv, xv)
+        self.points.append(CriticalPoint("limit", control, index, float(d_v), float(F_v)))
+
+    # ------------------------------------------------------------------ bifurcations
+    def _bifurcation(self, a, b, m, index):
+        """Locate the bifurcation between the states a and b (m crossing eigenvalues; 0: a
+        branch through a bifurcation point, see `_classify`), record it, maybe switch.
+
+        When the step is too short to bracket the point (the counts of its two ends,
+        recomputed, agree: both ends sit on the singular point within round-off), the end
+        state b stands for the point (``located`` False)."""
+        located = self._locate(a, b, m)
+        if located is None:
+            modes = self._modes_at(b.q, max(m, 1))
+            if modes is None:
+                self._restore(b.q)
+                return None
+            c = PathState(b.q.copy(), b.lam, b.d, -1, -1, energy=b.energy)
+            phi, mu, m = modes[1][:, 0], float(modes[0][0]), max(m, 1)
+        else:
+            c, phi, mu, m = located
+        c.neg_force, c.neg_disp = a.neg_force, a.neg_disp
+        point = CriticalPoint("bifurcation", "both", index, c.d, c.lam,
+                              positions=c.q.reshape(-1, 2).copy(),
+                              mode=expand_mode(self.system, phi), eigenvalue=mu,
+                              multiplicity=m, located=located is not None)
+        self.points.append(point)
+        return self._maybe_switch(point, a, b, c, phi)
+
+    def _maybe_switch(self, point, a, b, c, phi):
+        """Switch at ``c`` (reached from ``a``; ``b`` is the driver's last state) when
+        following branches; otherwise leave the system at ``b``."""
+        reroute = None
+        if self.branch == "follow" and self.switches < self.max_switches:
+            reroute = self._switch(a, c, phi, self.switch_size * self.nominal_step)
+        if reroute is None:
+            self._restore(b.q)
+            return None
+        point.switched = True
+        self.switches += 1
+        return reroute
+
+    def _modes_at(self, q, m):
+        """The m eigenpairs of K at q next to zero that do not move the load."""
+        self.system.evaluate(q)
+        band = self.system.band.copy()
+        negative = self._factor_assembled()
+        if negative is None:
+            return None
+        return critical_modes(band, m, negative, self.P)
+
+    # ------------------------------------------------------------------ linear algebra
+    # Critical points are where K is singular: the system's own factor() would hand such
+    # a K to its dense pivoting fallback (slow: O(n^3), and far slower when BLAS threads
+    # compete for the cores). Here any non-zero pivot is accepted: the count and the
+    # determinant stay exact, and the Newton corrections below never solve along the
+    # singular direction alone (they are combined on a plane that cuts it).
+    def _factor(self, q):
+        """Assemble and factorise K at q; returns the number of negative eigenvalues of K
+        under force control, or None when a pivot is exactly zero (or not finite)."""
+        self.system.evaluate(q)
+        return self._factor_assembled()
+
+    def _factor_assembled(self):
+        status, negative, _ = ldlt_factor(self.system.band, 0.0)
+        return int(negative) if status == 0 else None
+
+    def _solve(self, rhs):
+        """Solve with the factor of `_factor`; rhs (n,) or (n, m); returns a new array."""
+        b = np.array(rhs, dtype=float).reshape(self.system.n, -1)
+        out = ldlt_solve(self.system.band, np.ascontiguousarray(b))
+        return out.ravel() if np.ndim(rhs) == 1 else out
+
+    def _restore(self, q):
+        """Leave the shared system assembled and factorised (its own way) at q."""
+        self.system.evaluate(q)
+        self.system.factor()
+
+    # ------------------------------------------------------------------ equilibrium on a plane
+    def _solve_on_plane(self, q, lam, normal_u, normal_lam):
+        """Newton for grad(q) = lam P with increments kept on the plane
+        ``normal_u . du + normal_lam dlam = 0``; q (flat, m) is updated in place.
+        Returns (lam, negative count under force control) or None; the factor of K at the
+        converged q is left in the system's band (for `_solve`)."""
+        sysm, P = self.system, self.P
+        fmax = max(self.fscale, abs(lam))
+        tol_disp = 1e-11 * self.length
+        du_max = np.inf
+        for it in range(self.max_iter + 1):
+            negative = self._factor(q)  # assembles the gradient too
+            R = sysm.grad - lam * P
+            if negative is None or not np.all(np.isfinite(R)):
+                return None
+            if np.max(np.abs(R)) <= self.tol * fmax or du_max <= tol_disp:
+                return lam, negative
+            both = self._solve(np.stack([P, -R], axis=1))
+            uP, uR = both[:, 0], both[:, 1]
+            denom = float(normal_u @ uP) + normal_lam
+            if denom == 0.0 or not np.isfinite(denom):
+                return None
+            dl = -float(normal_u @ uR) / denom
+            du = uR + dl * uP
+            du_max = float(np.max(np.abs(du)))
+            if not np.isfinite(du_max):
+                return None
+            sysm.increment(q, du)
+            lam += dl
+        return None
+
+    def _test_values(self, negative, Du, omega0):
+        """At the factorised state: (label, log|g|) of the test function whose sign change
+        marks the bifurcation. ``Du`` None: g = det K_d ∝ det K . P^T K^-1 P (bordering K
+        with P), label = n_d. Else g = det of K bordered with the path tangent
+        ``t ∝ ±(u_P, 1)`` oriented along Du: ``(-1)^n_F sign(t_lam) |det K| (1 +
+        |u_P|^2 / omega0^2)^(1/2)``, which changes sign at a bifurcation point on any
+        branch through it and stays finite and signed at limit points; label = its sign."""
+        sysm, P = self.system, self.P
+        uP = self._solve(P)
+        flex = float(P @ uP)
+        with np.errstate(divide="ignore"):
+            logdet = float(np.sum(np.log(np.abs(sysm.band[0, : sysm.n]))))
+            if Du is None:
+                return held_count(negative, flex), logdet + float(np.log(abs(flex)))
+            orient = 1.0 if float(uP @ Du) >= 0.0 else -1.0
+            bordered = logdet + 0.5 * float(np.log1p(float(uP @ uP) / omega0**2))
+        return (-1.0) ** negative * orient, bordered
+
+    def _locate(self, a, b, m, tol_tau=1e-9, tol_f=1e-7, max_eval=40):
+        """The first zero of the test function (`_test_values`) on the step a -> b by
+        regula falsi with the Illinois modification; for m > 0 eigenvalues crossing, the
+        m-th root of det K_d with m following the count across the shrinking bracket.
+
+        Returns (state, mode (reduced, unit 2-norm), eigenvalue N/m, multiplicity) or None."""
+        sysm = self.system
+        Du = sysm.reduced(b.q) - sysm.reduced(a.q)
+        if not np.any(Du):
+            return None
+        through = m == 0  # a branch through a bifurcation point: the bordered test
+        omega0 = [None]
+
+        def evaluate(tau, lo, hi):
+            """Equilibrium on the plane tau (0 at a, 1 at b), from the bracket's states."""
+            s = (tau - lo[0]) / (hi[0] - lo[0]) if hi[0] != lo[0] else 0.0
+            q = lo[1] + s * (hi[1] - lo[1])
+            out = self._solve_on_plane(q, lo[2] + s * (hi[2] - lo[2]), Du, 0.0)
+            if out is None:
+                return None
+            if through and omega0[0] is None:
+                omega0[0] = max(float(np.linalg.norm(self._solve(self.P))), 1e-300)
+            label, logmag = self._test_values(out[1], Du if through else None, omega0[0])
+            return (tau, q, out[0], label, logmag)
+
+        ends = (0.0, a.q, a.lam), (1.0, b.q, b.lam)
+        lo, hi = evaluate(0.0, *ends), evaluate(1.0, *ends)
+        if lo is None or hi is None or lo[3] == hi[3]:
+            return None
+        n0, log0 = lo[3], lo[4]
+
+        def root(e):
+            return 1 if through else max(int(abs(e[3] - n0)), 1)
+
+        def f_of(e, m):
+            sign = 1.0 if e[3] == n0 else -1.0
+            return sign * float(np.exp(np.clip((e[4] - log0) / m, -700.0, 700.0)))
+
+        best, m = _illinois(lo, hi, evaluate, f_of, root, tol_tau, tol_f, max_eval)
+        _, q, lam, _, _ = best
+        modes = self._modes_at(q, m)
+        if modes is None:
+            return None
+        w, v = modes
+        state = PathState(q.copy(), lam, _node_displacement(self, q), -1, -1,
+                          energy=sysm.energy)
+        return state, v[:, 0], float(w[0]), m
+
+    # ------------------------------------------------------------------ switching
+    def _switch(self, a, c, phi, eps):
+        """Leave the point ``c`` along the branch that does not contain the state ``a``
+        (the direction of arrival, up to its sense); see the module doc."""
+        plane = self._tangent_plane(c, phi)
+        if plane is None:
+            return None
+        e1, e2, omega = plane
+        uc = self.system.reduced(c.q)
+        arrive = np.append(uc - self.system.reduced(a.q), omega * (c.lam - a.lam))
+        a1, a2 = float(e1 @ arrive), float(e2 @ arrive)
+        if a1 == 0.0 and a2 == 0.0:
+            a1, a2 = 0.0, 1.0
+        t = -a2 * e1 + a1 * e2
+        t /= np.linalg.norm(t)
+        found = []
+        for direction in (t, -t):
+            state = self._beyond(c, direction, omega, eps)
+            if state is not None:
+                found.append((state[0], float(direction @ e1), state[1], state[2]))
+        if not found:
+            return None
+        _, _, q, lam = _forward(found, c.d, self.length)
+        return self._rerouted(c, q, lam)
+
+    def _tangent_plane(self, c, phi):
+        """Orthonormal (e1, e2) spanning the equilibrium tangents at the bifurcation point
+        c, ``(phi, 0)`` and ``(v, omega)`` with ``K v = P``, ``v ⟂ phi`` (a bordered solve);
+        the load is scaled by omega = |v| (m/N). None when K cannot be factorised."""
+        if self._factor(c.q) is None:
+            return None
+        x = self._solve(self.P)
+        y = self._solve(phi)
+        v = x - (float(phi @ x) / float(phi @ y)) * y
+        omega = float(np.linalg.norm(v))
+        if not np.isfinite(omega) or omega == 0.0:
+            return None
+        e1 = np.append(phi, 0.0) / np.linalg.norm(phi)
+        e2 = np.append(v, omega) / (np.sqrt(2.0) * omega)
+        return e1, e2, omega
+
+    def _beyond(self, c, direction, omega, eps0):
+        """The equilibrium on the plane a distance eps beyond c along ``direction`` (scaled
+        (u, omega lam)), halving eps from eps0 until Newton lands near the predictor.
+        Returns (d, q, lam) or None."""
+        sysm = self.system
+        uc = sysm.reduced(c.q)
+        eps = eps0
+        while eps >= 1e-3 * eps0:
+            q = c.q.copy()
+            sysm.increment(q, direction[:-1], eps)
+            out = self._solve_on_plane(q, c.lam + eps * direction[-1] / omega,
+                                       direction[:-1], direction[-1] * omega)
+            if out is not None:
+                dz = np.append(sysm.reduced(q) - uc, omega * (out[0] - c.lam))
+                if np.linalg.norm(dz) <= 4.0 * eps:
+                    return _node_displacement(self, q), q, out[0]
+            eps *= 0.5
+        return None
+
+    def _rerouted(self, c, q, lam):
+        """The `Reroute` from the point c to the state (q, lam) on the new branch, with the
+        shared system left factorised at q."""
+        sysm, P = self.system, self.P
+        self._restore(q)
+        uP = sysm.solve(P)
+        step = sysm.reduced(q) - sysm.reduced(c.q)
+        orient = 1.0 if float(uP @ step) >= 0.0 else -1.0
+        flex = float(P @ uP)
+        negative = sysm.negative_eigenvalues
+        state = PathState(q, lam, _node_displacement(self, q), negative,
+                          held_count(negative, flex), orient,
+                          orient * (1.0 if flex >= 0.0 else -1.0), sysm.energy)
+        rate = None
+        if abs(flex) > 0.0 and np.isfinite(flex):  # du/dd = u_P / (P^T u_P) on the branch
+            rate = expand_mode(sysm, uP / flex).reshape(-1)
+        return Reroute(c, state, step, rate)
+
+
+def _illinois(lo, hi, evaluate, f_of, root, tol_tau, tol_f, max_eval):
+    """Regula falsi with the Illinois modification on a bracket of evaluations
+    ``e = (tau, q, lam, label, log|g|)``; ``lo`` has the starting label, ``hi`` another.
+    ``f_of(e, m)``: the signed test value; ``root(e)``: the multiplicity m the bracket
+    [lo, e] implies. Returns (the evaluation with the smallest |f|, m)."""
+    label0 = lo[3]
+    weights = [1.0, 1.0]  # halve the weight of an end kept twice in a row
+    side = 0
+    m = root(hi)
+    best = hi
+    for _ in range(max_eval):
+        if hi[0] - lo[0] <= tol_tau or abs(f_of(best, m)) <= tol_f:
+            break
+        f_lo, f_hi = weights[0] * f_of(lo, m), weights[1] * f_of(hi, m)
+        tau = (lo[0] * f_hi - hi[0] * f_lo) / (f_hi - f_lo)
+        if not lo[0] < tau < hi[0]:
+            tau = 0.5 * (lo[0] + hi[0])
+        e = evaluate(tau, lo, hi) or evaluate(0.5 * (lo[0] + hi[0]), lo, hi)
+        if e is None:
+            break
+        if e[3] == label0:
+            lo, weights[0] = e, 1.0
+            if side == 1:
+                weights[1] *= 0.5
+            side = 1
+        else:
+            hi, weights[1] = e, 1.0
+            if side == -1:
+                weights[0] *= 0.5
+            side = -1
+            if root(hi) != m:  # fewer eigenvalues cross in the smaller bracket
+                m, weights, side = root(hi), [1.0, 1.0], 0
+        best = min((lo, hi), key=lambda x: abs(f_of(x, m)))
+    return best, m
+
+
+def _classify(prev, neg_disp, dir_disp):
+    """What lies between the state ``prev`` and a state with these values.
+
+    Returns (limit, crossing): ``limit`` True for a limit point of d; ``crossing`` None, or
+    the number of eigenvalues crossing zero while d keeps its direction (a bifurcation on
+    the path), or 0 for a branch that passes through a bifurcation point as it turns in d.
+    The latter is read off the invariant ``(-1)^n_d sign(dd/ds)`` — the sign of the
+    determinant of K bordered with the tangent — which flips at bifurcation points only.
+    """
+    crossed = neg_disp - prev.neg_disp
+    if prev.dir_disp * dir_disp > 0.0:
+        return False, (abs(crossed) if crossed else None)
+    if crossed % 2:
+        return True, None
+    return crossed != 0, 0
+
+
+def _forward(candidates, d_c, length):
+    """Of the candidate states (d, phi-component, q, lam), the one that advances the push
+    most; when they advance alike (mirror images), the one along +phi."""
+    span = max(abs(f[0] - d_c) for f in candidates)
+    tie = 1e-3 * span + 1e-12 * length
+    best = max(candidates, key=lambda f: f[0])
+    alike = [f for f in candidates if best[0] - f[0] <= tie]
+    return max(alike, key=lambda f: f[1])
+
+
+def _node_displacement(monitor, q):
+    """Displacement (m) of the pushed node along the push direction at flat positions q."""
+    X = monitor.structure.reference_positions
+    ctl = monitor.control
+    return float(ctl.direction @ (q.reshape(-1, 2)[ctl.node] - X[ctl.node]))
