@@ -23,12 +23,11 @@ _RANGES = {
 #: solver resolution (`nodes` of `solver.unit.simulate_unit`) of a Grid unless given;
 #: None = the solver's converged default, resolved and recorded when a build starts
 PRESET_RESOLUTION = None
-#: resolution of the `default` preset, chosen by measurement (pipeline.accuracy, 200 random
-#: off-grid points, solver of commit b6c2576 + working tree at 17:45 UTC): at the solver's
-#: default of 101 nodes, F_cr has mesh-alignment dips of ~3 % between w/L = 0.02 and 0.03, so
-#: interpolated F_cr misses its 2 % target there (max 2.8 %; theta 0.06 deg, S 0.06 %); at
-#: 161 nodes every target is met (theta 0.19 deg, S 0.06 %, F_cr 1.3 %) for ~2.2x the time.
-DEFAULT_MAP_RESOLUTION = 161
+#: resolution of the `default` preset: the solver's converged default (None). An earlier
+#: solver had F_cr dips of ~3 % between w/L = 0.02 and 0.03 (a roller moved by half an edge
+#: where 0.03 L met b + w) and a parabola-fitted F_cr, which pinned this to 161 nodes; both
+#: are fixed, see the accuracy figures in the issue notes (`make maps-accuracy`).
+DEFAULT_MAP_RESOLUTION = None
 MIN_RESOLUTION = 5
 
 

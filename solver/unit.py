@@ -24,6 +24,7 @@ import numpy as np
 
 from solver.continuation import ConvergenceError
 from solver.stability import state_stability
+from solver.states import DisplacementProbe, refine_maximum, zero_force_displacement
 from solver.unit_model import DEFAULT_NODES, UnitGeometry, UnitModel, build_unit
 
 __all__ = ["UnitGeometry", "UnitResult", "simulate_unit", "STATUS_CODES"]
@@ -147,9 +148,10 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness):
     def shape(pos):
         return {"arch": pos[arch].copy(), "base": pos[base].copy()}
 
+    probe = DisplacementProbe(st, model.apex, (0.0, -1.0))
     i_pk = _first_peak(F)
     if i_pk is not None:
-        result.F_cr, result.d_cr = _refine_peak(d, F, i_pk)
+        result.F_cr, result.d_cr = _refine_peak(d, F, i_pk, probe, path.positions)
         result.shapes["i"] = shape(path.positions[i_pk])
     if critical:
         d_snap = result.d_cr if i_pk is not None else np.inf
@@ -168,15 +170,11 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness):
             result.status = path.status
         return result
 
-    pos_ii = _solve_zero_force(st, path, j)
-    pos_iii = _solve_zero_force(st, path, k)
     X = st.reference_positions
+    pos_ii = _solve_zero_force(st, path, j, probe)
+    pos_iii = _solve_zero_force(st, path, k, probe)
     result.d_unstable = float(X[model.apex, 1] - pos_ii[model.apex, 1])
     result.d_second = float(X[model.apex, 1] - pos_iii[model.apex, 1])
-    if not (d[j - 1] - 1e-9 <= result.d_unstable <= d[j] + 1e-9 and
-            d[k - 1] - 1e-9 <= result.d_second <= d[k] + 1e-9):
-        result.status = "not converged: the zero-force states left their path brackets"
-        return result
     result.bistable = True
     base_pos = pos_iii[base]
     result.base_shape = base_pos.copy()
@@ -210,18 +208,23 @@ def _first_peak(F):
     return None
 
 
-def _refine_peak(d, F, i):
-    """Vertex of the parabola through the three path points around the maximum."""
+def _refine_peak(d, F, i, probe, positions):
+    """F_cr and d_cr: the maximum of F(d) located by displacement-controlled solves around
+    path sample ``i`` (a force maximum is a regular point under displacement control); the
+    vertex of the parabola through the three samples if the path is not monotone there."""
     x, y = d[i - 1: i + 2], F[i - 1: i + 2]
-    if not (x[0] < x[1] < x[2]):
-        return float(F[i]), float(d[i])
-    a, b, c = np.polyfit(x - x[1], y, 2)
-    if a >= 0:
-        return float(F[i]), float(d[i])
-    xv = -b / (2 * a)
-    if not (x[0] - x[1] <= xv <= x[2] - x[1]):
-        return float(F[i]), float(d[i])
-    return float(c - b * b / (4 * a)), float(x[1] + xv)
+    if x[0] < x[1] < x[2]:
+        try:
+            F_max, d_max = refine_maximum(probe, d, F, positions, i, tol_d=2e-3 * (x[2] - x[0]))
+            if F_max >= F[i]:
+                return float(F_max), float(d_max)
+        except ConvergenceError:
+            pass
+        a, b, c = np.polyfit(x - x[1], y, 2)
+        xv = -b / (2 * a) if a < 0 else np.inf
+        if x[0] - x[1] <= xv <= x[2] - x[1]:
+            return float(c - b * b / (4 * a)), float(x[1] + xv)
+    return float(F[i]), float(d[i])
 
 
 def _first_crossing(F, start, downward):
@@ -233,12 +236,35 @@ def _first_crossing(F, start, downward):
     return None
 
 
-def _solve_zero_force(st, path, i):
-    """Equilibrium at F = 0 from the path states bracketing the zero crossing at step i."""
-    F0, F1 = path.force[i - 1], path.force[i]
+def _solve_zero_force(st, path, i, probe):
+    """Equilibrium at F = 0 between the path states i-1 and i (which bracket a zero of F).
+
+    Newton under load control from the interpolated state first; if it lands outside the
+    bracket (it can wander to another equilibrium), the zero is located by regula falsi on
+    displacement-controlled solves, and Newton finishes from there."""
+    d, F, P = path.displacement, path.force, path.positions
+    F0, F1 = F[i - 1], F[i]
     s = F0 / (F0 - F1)
-    guess = (1 - s) * path.positions[i - 1] + s * path.positions[i]
+    apex = probe.control.node
+    z0 = probe.X[apex, 1]
+    lo, hi = min(d[i - 1], d[i]), max(d[i - 1], d[i])
+    pad = 1e-6 * (hi - lo) + 1e-12
+
+    def inside(pos):
+        return lo - pad <= z0 - pos[apex, 1] <= hi + pad
+
+    guess = (1 - s) * P[i - 1] + s * P[i]
+    try:
+        pos, _ = st.solve_equilibrium(guess, node=None)
+        if inside(pos):
+            return pos
+    except ConvergenceError:
+        pass
+    tol_F = 1e-9 * max(abs(F0), abs(F1))
+    x, guess = zero_force_displacement(probe, d[i - 1], d[i], P[i - 1], P[i], F0, F1, tol_F)
     pos, _ = st.solve_equilibrium(guess, node=None)
+    if not inside(pos):
+        raise ConvergenceError("the zero-force state left its path bracket")
     return pos
 
 
