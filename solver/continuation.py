@@ -198,9 +198,23 @@ def _newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move, prescrib
     assembled and factorised state at the converged q.
     """
     du_max = np.inf
+    if P is None:
+        P = np.zeros(system.n)
     for it in range(max_iter + 1):
+        # the fused kernel does the whole iteration in one compiled call; the general path
+        # below (dense pivoting fallback, damped steps) takes over when it cannot
+        if it < max_iter:
+            fstat, r_max, du_step = system.fused_newton(
+                q, lam, P, tol_force if du_max > tol_disp else np.inf)
+            if fstat == 0:
+                return it
+            if fstat == 2 and du_step <= max_move:
+                du_max = du_step
+                continue
+            if fstat == 2:  # undo the too-long step and damp it below
+                system.increment(q, system._work[:, 1], -1.0)
         system.evaluate(q)
-        R = system.grad - lam * P if P is not None else system.grad
+        R = system.grad - lam * P
         if not np.all(np.isfinite(R)):
             return -1
         ok = system.factor()
@@ -450,6 +464,17 @@ def follow_mgdc(
             fmax = max(fscale, abs(lam_try))
             du_max = np.inf
             for it in range(1, max_iter + 1):
+                fstat, r_max, du_step, dl = system.fused_mgdc(
+                    q_try, lam_try, P, uP1, tol * fmax if du_max > tol_disp else np.inf)
+                if fstat == 0:
+                    converged = True
+                    break
+                if fstat == 2:
+                    du_max = du_step
+                    lam_try += dl
+                    total_iterations += 1
+                    continue
+                # LDL^T without pivoting failed: the general path with the dense fallback
                 system.evaluate(q_try)
                 R = system.grad - lam_try * P
                 if not np.all(np.isfinite(R)) or not system.factor():

@@ -11,6 +11,7 @@ import scipy.linalg
 
 from solver.assembly import apply_increment, assemble_system, element_dofs
 from solver.banded import band_to_dense, ldlt_factor, ldlt_solve
+from solver.iteration import mgdc_iteration, newton_iteration
 
 # A pivot smaller than this times the largest diagonal entry means K is numerically singular
 # for LDL^T without pivoting; the dense pivoting fallback then takes over.
@@ -37,6 +38,7 @@ class ReducedSystem:
         self._band_copy = np.empty_like(self.band)
         self.grad = np.zeros(max(self.n, 1))
         self.grad_full = np.zeros(self.dof_map.shape[0])
+        self._work = np.zeros((max(self.n, 1), 3))
         self.energy = 0.0
         self.negative_eigenvalues = 0
         self.factor_ok = False
@@ -86,6 +88,35 @@ class ReducedSystem:
         else:
             out = ldlt_solve(self.band, np.ascontiguousarray(b2))
         return out.ravel() if one else out
+
+    def fused_newton(self, q, lam, P, tol_force):
+        """One fused Newton iteration at load lam P (see `solver.iteration`); updates q.
+
+        Returns (status, residual_max, du_max): status 0 converged (K at q factorised),
+        1 LDL^T failed (nothing done: use evaluate/factor/solve), 2 q updated."""
+        if self._work.shape[1] < 3:
+            self._work = np.zeros((self.n, 3))
+        status, neg, r_max, du_max, energy = newton_iteration(
+            q, lam, P, self.elements, self.dofs, self.dof_map, self.band, self.grad,
+            self.grad_full, self._work, PIVOT_TOL, tol_force)
+        self._after_fused(status, neg, energy)
+        return status, r_max, du_max
+
+    def fused_mgdc(self, q, lam, P, uP1, tol_force):
+        """One fused MGDC corrector iteration; updates q. Returns (status, residual_max,
+        du_max, dlam) with the statuses of `fused_newton`."""
+        status, neg, r_max, du_max, dl, energy = mgdc_iteration(
+            q, lam, P, uP1, self.elements, self.dofs, self.dof_map, self.band, self.grad,
+            self.grad_full, self._work, PIVOT_TOL, tol_force)
+        self._after_fused(status, neg, energy)
+        return status, r_max, du_max, dl
+
+    def _after_fused(self, status, neg, energy):
+        self.energy = energy
+        self._dense_lu = None
+        self.factor_ok = status != 1
+        if status != 1:
+            self.negative_eigenvalues = int(neg)
 
     def reduced(self, q):
         """Reduced DOF values of the full vector ``q``."""
