@@ -49,6 +49,9 @@ class UnitResult:
     energy_barrier: float = NAN
     energy_stored: float = NAN
     self_standing: bool | None = None
+    #: state (iii) with the actuator and rollers removed (what an array without actuators
+    #: holds): {"base_shape", "S" (chord, m), "theta_deg", "arch"}; empty when not stable
+    released: dict = field(default_factory=dict)
     bifurcation: bool | None = None
     curve: tuple = (np.zeros(0), np.zeros(0))
     base_shape: np.ndarray = field(default_factory=lambda: np.full((0, 2), np.nan))
@@ -188,7 +191,16 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness):
         result.stability["states"]["ii"] = _state_stability(st, model, pos_ii, force_system)
         result.stability["states"]["iii"] = _state_stability(st, model, pos_iii, force_system)
     if check_self_standing:
-        result.self_standing = _self_standing(g, model, pos_iii, nodes, tie, tie_stiffness)
+        result.self_standing, released = _self_standing(g, model, pos_iii, nodes, tie,
+                                                         tie_stiffness)
+        if released is not None:
+            rb = released[base]
+            result.released = {
+                "base_shape": rb.copy(),
+                "S": float(np.hypot(*(rb[-1] - rb[0]))),
+                "theta_deg": _end_tangent_angle(rb),
+                "arch": released[arch].copy(),
+            }
     return result
 
 
@@ -280,7 +292,8 @@ def _end_tangent_angle(base_pos):
 
 def _self_standing(g, model, pos_iii, nodes, tie, tie_stiffness):
     """Is state (iii) stable with the actuator and rollers removed (rigid-body motion held
-    by a statically determinate set of constraints)?"""
+    by a statically determinate set of constraints)? Returns (flag, released positions or
+    None)."""
     free = build_unit(g, nodes=nodes, tie=tie, tie_stiffness=tie_stiffness,
                       actuator=False, supports=False)
     st = free.structure
@@ -289,6 +302,7 @@ def _self_standing(g, model, pos_iii, nodes, tie, tie_stiffness):
     try:
         pos, info = st.solve_equilibrium(pos_iii, node=None)
     except ConvergenceError:
-        return False
+        return False, None
     moved = float(np.max(np.abs(pos - pos_iii)))
-    return bool(info["negative_eigenvalues"] == 0 and moved < 0.25 * g.h)
+    ok = bool(info["negative_eigenvalues"] == 0 and moved < 0.25 * g.h)
+    return ok, (pos if ok else None)

@@ -208,3 +208,18 @@ def test_random_sweep_always_returns_a_result_or_a_clear_status():
     # the sweep is mostly bistable units; failures, if any, are rare
     assert statuses.get("ok", 0) >= 150, statuses
     assert statuses.get("not converged", 0) <= 4, statuses
+
+
+def test_released_state_is_a_free_equilibrium(specimen):
+    """State (iii) with the actuator and rollers removed: an equilibrium of the free unit
+    (no net force on any node group), turning a little less than with the joint held."""
+    rel = specimen.released
+    assert set(rel) >= {"base_shape", "S", "theta_deg", "arch"}
+    assert 0 < specimen.theta_deg - rel["theta_deg"] < 3.0
+    m = build_unit(SPECIMEN, actuator=False, supports=False)
+    pos = m.structure.reference_positions.copy()
+    pos[m.arch_nodes] = rel["arch"]
+    pos[m.base_nodes] = rel["base_shape"]
+    net = np.zeros_like(pos)
+    np.add.at(net, m.structure.supernodes(), m.structure.gradient(pos))
+    assert np.abs(net).max() < 1e-6 * specimen.F_cr
