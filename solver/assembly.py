@@ -90,38 +90,13 @@ def assemble_system(q, elements, dofs, band, grad_red, grad_full):
     return energy
 
 
-@njit(cache=True)
 def total_energy(q, elements):
-    """Total elastic energy (J) of the positions ``q`` (no derivatives wanted)."""
-    stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
-    energy = 0.0
-    x4 = np.empty(4)
-    g4 = np.empty(4)
-    h4 = np.empty((4, 4))
-    for e in range(stretch_nodes.shape[0]):
-        nodes = stretch_nodes[e]
-        for a in range(2):
-            x4[2 * a] = q[2 * nodes[a]]
-            x4[2 * a + 1] = q[2 * nodes[a] + 1]
-        energy += stretch_terms(x4, stretch_params[e, 0], stretch_params[e, 1], g4, h4)
-    x6 = np.empty(6)
-    g6 = np.empty(6)
-    h6 = np.empty((6, 6))
-    for e in range(bend_nodes.shape[0]):
-        nodes = bend_nodes[e]
-        for a in range(3):
-            x6[2 * a] = q[2 * nodes[a]]
-            x6[2 * a + 1] = q[2 * nodes[a] + 1]
-        energy += bending_terms(x6, bend_params[e, 0], bend_params[e, 1], g6, h6)
-    for e in range(spring_nodes.shape[0]):
-        nodes = spring_nodes[e]
-        for a in range(2):
-            x4[2 * a] = q[2 * nodes[a]]
-            x4[2 * a + 1] = q[2 * nodes[a] + 1]
-        energy += spring_terms(
-            x4, spring_params[e, 0], spring_params[e, 1], spring_params[e, 2], g4, h4
-        )
-    return energy
+    """Total elastic energy (J) of the positions ``q``: the assembler run with every DOF
+    marked fixed, so that nothing is scattered into a stiffness."""
+    dofs = tuple(-np.ones((conn.shape[0], 2 * conn.shape[1]), dtype=np.int64)
+                 for conn in (elements[0], elements[2], elements[4]))
+    return assemble_system(np.ascontiguousarray(q, dtype=float), elements, dofs,
+                           np.zeros((1, 1)), np.zeros(1), np.zeros(q.shape[0]))
 
 
 @njit(cache=True)

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from solver import Structure
+from solver import Structure, reference_models
 
 
 def clamped_rod_nodes(n_nodes, length):
@@ -16,16 +16,6 @@ def clamped_rod_nodes(n_nodes, length):
 
 
 def clamped_arch(h, n_nodes=101, t=0.5e-3, l=0.1, w=5e-3, E=2.2e9):
-    """Clamped–clamped cosine arch z = h/2 (1 - cos 2 pi x / l), both clamps at edge midpoints,
-    midpoint held in rotation (three nodes rigid) and in x. Returns (structure, mid, EI)."""
-    ds = l / (n_nodes - 2)
-    x = -0.5 * ds + ds * np.arange(n_nodes)
-    z = np.where((x > 0) & (x < l), 0.5 * h * (1 - np.cos(2 * np.pi * x / l)), 0.0)
-    st = Structure()
-    st.add_rod(np.stack([x, z], 1), width=w, thickness=t, E=E)
-    for node in (0, 1, n_nodes - 2, n_nodes - 1):
-        st.fix(node, "xz")
-    mid = n_nodes // 2
-    st.rigid([mid - 1, mid, mid + 1])
-    st.fix(mid, "x")
-    return st, mid, E * w * t**3 / 12
+    """Clamped–clamped cosine arch, midpoint held in rotation and x (see
+    `solver.reference_models`). Returns (structure, mid, EI)."""
+    return reference_models.clamped_arch(h, n_nodes=n_nodes, t=t, l=l, w=w, E=E)

@@ -15,7 +15,7 @@ Reference cases:
 import numpy as np
 import pytest
 
-from solver import Structure
+from solver import Structure, reference_models
 from solver.stability import (
     StateStability,
     eigenmodes,
@@ -35,15 +35,8 @@ MM = 1e-3
 def free_centre_arch(h_over_t, n_nodes=101):
     """The clamped cosine arch with only the midpoint's x held (its rotation free)."""
     h = h_over_t * T
-    ds = L_SPAN / (n_nodes - 2)
-    x = -0.5 * ds + ds * np.arange(n_nodes)
-    z = np.where((x > 0) & (x < L_SPAN), 0.5 * h * (1 - np.cos(2 * np.pi * x / L_SPAN)), 0.0)
-    st = Structure()
-    st.add_rod(np.stack([x, z], 1), width=W, thickness=T, E=E)
-    for node in (0, 1, n_nodes - 2, n_nodes - 1):
-        st.fix(node, "xz")
-    mid = n_nodes // 2
-    st.fix(mid, "x")
+    st, mid, _ = reference_models.clamped_arch(h, n_nodes=n_nodes, t=T, l=L_SPAN, w=W, E=E,
+                                               centre_clamped=False)
     return st, mid, h
 
 
