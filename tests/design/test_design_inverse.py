@@ -7,6 +7,7 @@ import pytest
 
 from design import Unit, chain, inverse_design
 from design.lookup import MapLookup
+from design.paper import s_control_points
 
 T, W = 0.5e-3, 5e-3
 KNOWN = [Unit(L=0.10, h=0.020, t=T, w=W, side=1),
@@ -138,21 +139,8 @@ def test_self_crossing_target(design_map):
 
 
 def _s_shape(R, n, turn, straight):
-    """Control points (m) and tangents (deg): an arc of radius R turning `turn` degrees left in
-    n equal segments, a straight, then the mirror arc turning right."""
-    pts, ang = [], []
-    for i in range(n + 1):
-        a = math.radians(turn * i / n)
-        pts.append((R * math.sin(a), R * (1 - math.cos(a))))
-        ang.append(turn * i / n)
-    a = math.radians(turn)
-    p = np.array(pts[-1]) + straight * np.array([math.cos(a), math.sin(a)])
-    c = p + R * np.array([math.sin(a), -math.cos(a)])  # centre of the right-turning arm
-    for i in range(n + 1):
-        b = a - math.radians(turn * i / n)
-        pts.append(tuple(c + R * np.array([-math.sin(b), math.cos(b)])))
-        ang.append(turn - turn * i / n)
-    return np.array(pts), np.array(ang)
+    """Control points (m) and tangents (deg) of the paper-style S (`design.paper`)."""
+    return s_control_points(R=R, turn=turn, n=n, straight=straight)
 
 
 def test_tangent_vectors_and_wrapping(design_map):
