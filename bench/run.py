@@ -62,6 +62,18 @@ def main():
           f"target <= 20 ms), {len(path)} steps, {iters} Newton iterations, "
           f"{med / iters * 1e6:.0f} us per iteration (assemble + LDL^T + solve)")
 
+    from bench.cases import cantilever_push
+
+    per_iter = []
+    for n in (101, 201, 401, 801):
+        cantilever_push(n)
+        med, _, path = median_time(lambda: cantilever_push(n), runs=3)
+        iters = int(path.info["total_iterations"]) + len(path) - 1
+        per_iter.append((n, med / iters * 1e6))
+    print("scaling, cantilever MGDC (time per Newton iteration): " + ", ".join(
+        f"{n} nodes {us:.0f} us" for n, us in per_iter)
+        + f"  (x{per_iter[-1][1] / per_iter[0][1]:.1f} for x8 nodes: banded, linear in N)")
+
     specimen_unit()
     med, best, r = median_time(specimen_unit)
     print(f"unit (L=100, h=20, t=0.5, w=b=5 mm) at default resolution ({r.n_nodes} nodes), "

@@ -223,3 +223,24 @@ def test_released_state_is_a_free_equilibrium(specimen):
     net = np.zeros_like(pos)
     np.add.at(net, m.structure.supernodes(), m.structure.gradient(pos))
     assert np.abs(net).max() < 1e-6 * specimen.F_cr
+
+
+def test_F_cr_is_the_exact_force_maximum(specimen):
+    """F_cr is located by displacement-controlled solves: no path sample exceeds it, and a
+    dense scan of F(d) under displacement control around d_cr peaks at the same value."""
+    from solver.states import DisplacementProbe
+
+    d, F = specimen.curve
+    assert F.max() <= specimen.F_cr * (1 + 1e-12)
+    m = build_unit(SPECIMEN)
+    probe = DisplacementProbe(m.structure, m.apex)
+    i = int(np.argmax(F))
+    pos = m.structure.reference_positions.copy()
+    pos[m.arch_nodes] = specimen.shapes["i"]["arch"]
+    pos[m.base_nodes] = specimen.shapes["i"]["base"]
+    scan = []
+    for x in np.linspace(specimen.d_cr - 0.02 * d[i], specimen.d_cr + 0.02 * d[i], 21):
+        pos, f, _ = probe.solve(pos, x)
+        scan.append(f)
+    assert max(scan) == pytest.approx(specimen.F_cr, rel=1e-6)
+    assert np.argmax(scan) == 10  # the maximum sits at d_cr, the middle of the scan
