@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed-stamp
 JOBS   ?=
 
 .DEFAULT_GOAL := help
-.PHONY: help venv test test-fast bench maps maps-ci maps-accuracy check-maps figures coverage clean
+.PHONY: help venv test test-fast bench maps maps-ci maps-accuracy check-maps figures test-nojit clean
 
 help:  ## list the targets
 	@echo "snapmorph make targets:"
@@ -44,8 +44,8 @@ maps-accuracy: $(STAMP)  ## interpolated map values against direct simulation at
 figures: $(STAMP)  ## write the paper's figures into figures/
 	$(PY) -m snapmorph figures --out figures
 
-coverage: $(STAMP)  ## run the fast tests as plain Python (NUMBA_DISABLE_JIT=1) under coverage
-	NUMBA_DISABLE_JIT=1 $(PY) -m pytest -q -m "not slow"
+test-nojit: $(STAMP)  ## run the kernel tests as plain Python (NUMBA_DISABLE_JIT=1), for debugging
+	NUMBA_DISABLE_JIT=1 $(PY) -m pytest -q tests/solver/test_energies.py tests/solver/test_banded.py
 
 clean:  ## remove caches (keeps .venv)
 	find . -name __pycache__ -type d -prune -exec rm -rf {} +
