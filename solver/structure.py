@@ -185,7 +185,10 @@ class Structure:
     def tie(self, node_a, node_b, method="exact", stiffness=None):
         """Bond two nodes: ``method="exact"`` (equal displacements, u = W u_i) or
         ``"spring"`` (stiff zero-length spring; ``stiffness`` N/m, default 1e3 times the
-        stiffest adjacent edge's EA / length)."""
+        stiffest adjacent edge's EA / length).
+
+        Both keep the nodes' reference offset fixed in global axes, so bond coincident nodes
+        (as the unit does): an offset bond resists rigid rotation of the structure."""
         a = self._check_node(node_a, "node_a")
         b = self._check_node(node_b, "node_b")
         if a == b:
