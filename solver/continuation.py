@@ -191,7 +191,7 @@ class _Recorder:
 
 
 # ---------------------------------------------------------------------- Newton
-def _newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move, prescribed=None):
+def _newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move):
     """Newton at fixed load ``lam P``; q is updated in place.
 
     Returns iterations used, or -1 when it failed. On success the system holds the
@@ -212,7 +212,7 @@ def _newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move, prescrib
                 du_max = du_step
                 continue
             if fstat == 2:  # undo the too-long step and damp it below
-                system.increment(q, system._work[:, 1], -1.0)
+                system.increment(q, system.last_correction, -1.0)
         system.evaluate(q)
         R = system.grad - lam * P
         if not np.all(np.isfinite(R)):

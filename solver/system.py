@@ -94,8 +94,6 @@ class ReducedSystem:
 
         Returns (status, residual_max, du_max): status 0 converged (K at q factorised),
         1 LDL^T failed (nothing done: use evaluate/factor/solve), 2 q updated."""
-        if self._work.shape[1] < 3:
-            self._work = np.zeros((self.n, 3))
         status, neg, r_max, du_max, energy = newton_iteration(
             q, lam, P, self.elements, self.dofs, self.dof_map, self.band, self.grad,
             self.grad_full, self._work, PIVOT_TOL, tol_force)
@@ -110,6 +108,11 @@ class ReducedSystem:
             self.grad_full, self._work, PIVOT_TOL, tol_force)
         self._after_fused(status, neg, energy)
         return status, r_max, du_max, dl
+
+    @property
+    def last_correction(self):
+        """The reduced increment applied by the last `fused_newton` call that updated q."""
+        return self._work[:, 1]
 
     def _after_fused(self, status, neg, energy):
         self.energy = energy

@@ -25,7 +25,7 @@ import numpy as np
 from solver.continuation import ConvergenceError
 from solver.stability import state_stability
 from solver.states import DisplacementProbe, refine_maximum, zero_force_displacement
-from solver.unit_model import DEFAULT_NODES, UnitGeometry, UnitModel, build_unit
+from solver.unit_model import DEFAULT_NODES, UnitGeometry, build_unit
 
 __all__ = ["UnitGeometry", "UnitResult", "simulate_unit", "STATUS_CODES"]
 

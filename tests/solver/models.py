@@ -15,6 +15,14 @@ def clamped_rod_nodes(n_nodes, length):
     return -0.5 * ds + ds * np.arange(n_nodes)
 
 
+def first_peak_index(force):
+    """Index of the first local maximum of a force history (the snap-through force)."""
+    i = 1
+    while i < len(force) - 1 and force[i + 1] >= force[i]:
+        i += 1
+    return i
+
+
 def clamped_arch(h, n_nodes=101, t=0.5e-3, l=0.1, w=5e-3, E=2.2e9):
     """Clamped–clamped cosine arch, midpoint held in rotation and x (see
     `solver.reference_models`). Returns (structure, mid, EI)."""

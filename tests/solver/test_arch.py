@@ -9,16 +9,9 @@ approximate closed-form values for large h/t).
 import numpy as np
 import pytest
 
-from tests.solver.models import clamped_arch
+from tests.solver.models import clamped_arch, first_peak_index
 
 T, L_SPAN = 0.5e-3, 0.1
-
-
-def first_peak(force):
-    i = 1
-    while i < len(force) - 1 and force[i + 1] >= force[i]:
-        i += 1
-    return i
 
 
 def arch_path(h_over_t, method="mgdc", n_nodes=101):
@@ -34,7 +27,7 @@ def test_snap_through_passes_both_limit_points(h_over_t):
     assert path.status == "ok"
     assert path.displacement[-1] >= 2.2 * h * (1 - 1e-9)
     f = path.force / unit
-    ipk = first_peak(f)
+    ipk = first_peak_index(f)
     f_max, f_min = f[ipk], f.min()
     imin = int(np.argmin(f))
     # the curve rises, falls through zero (negative stiffness), and rises again

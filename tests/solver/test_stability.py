@@ -24,7 +24,7 @@ from solver.stability import (
     state_stability,
 )
 from solver.unit import UnitGeometry, simulate_unit
-from tests.solver.models import clamped_arch
+from tests.solver.models import clamped_arch, first_peak_index
 from tests.solver.test_column import P_CR, column
 
 L_SPAN, T, W, E = 0.1, 0.5e-3, 5e-3, 2.2e9
@@ -41,10 +41,8 @@ def free_centre_arch(h_over_t, n_nodes=101):
 
 
 def first_peak(force):
-    i = 1
-    while i < len(force) - 1 and force[i + 1] >= force[i]:
-        i += 1
-    return float(force[i])
+    """The first force maximum (N)."""
+    return float(force[first_peak_index(force)])
 
 
 def asymmetry(positions):
