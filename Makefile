@@ -41,7 +41,7 @@ check-maps: $(STAMP)  ## recompute the CI grid and compare it with the committed
 maps-accuracy: $(STAMP)  ## interpolated map values against direct simulation at random off-grid points
 	$(PY) -m pipeline.accuracy --map maps/data/default.nc --n 50
 
-figures: $(STAMP)  ## write the paper's figures into figures/
+figures: $(STAMP)  ## write the paper's figures into figures/ with a gallery page figures/index.md
 	$(PY) -m snapmorph figures --out figures
 
 test-nojit: $(STAMP)  ## run the kernel tests as plain Python (NUMBA_DISABLE_JIT=1), for debugging

@@ -4,6 +4,9 @@ The base of an array in any snapping state is the concatenation of its units' ba
 translated and rotated so that it starts where the previous one ends, along the previous end
 tangent. Neighbouring units are assumed not to interact (the paper's conjecture, validated on
 three units).
+
+Every function takes ``state=``: "released" (default, None: the units as used, actuators
+removed) or "actuated" (each snapped unit's state (iii) with its actuator still glued).
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from design.lookup import MapLookup
+from design.lookup import MapLookup, check_state
 from design.shapes import UnitShape, unit_shape
 from design.units import Unit
 
@@ -32,9 +35,12 @@ class Chain:
 
 
 def chain(units, snapped, source: str = "map", lookup: MapLookup | None = None,
-          start=(0.0, 0.0), start_angle: float = 0.0, **kw) -> Chain:
-    """Place the units' base shapes end to end, from `start` (m) heading `start_angle` (rad)."""
+          start=(0.0, 0.0), start_angle: float = 0.0, state: str | None = None, **kw) -> Chain:
+    """Place the units' base shapes end to end, from `start` (m) heading `start_angle` (rad);
+    snapped units in ``state`` ("released" by default, or "actuated")."""
     units, snapped = _check(units, snapped)
+    if state is not None:
+        kw["state"] = check_state(state)
     if source == "map" and lookup is None and any(s and not u.is_spacer
                                                   for u, s in zip(units, snapped)):
         lookup = MapLookup()
@@ -63,16 +69,19 @@ def place(shapes: list[UnitShape], start=(0.0, 0.0), start_angle: float = 0.0) -
 
 
 def forward_kinematics(units, snapped=None, source: str = "map", design_map=None,
-                       start=(0.0, 0.0), start_angle: float = 0.0, **kw) -> np.ndarray:
+                       start=(0.0, 0.0), start_angle: float = 0.0, state: str | None = None,
+                       **kw) -> np.ndarray:
     """Base polyline (K, 2) in m of `units` with unit i snapped when `snapped[i]`.
 
     `snapped`: booleans, a '0'/'1' string, or None (all snapped). Starts at `start` heading
     `start_angle` (rad; default (0, 0) and +x). `source`: "map" (design map, `design_map` or the
     default one) or "simulate" (direct simulation; keyword `E`, `nodes` passed on).
+    `state`: "released" (default: the units with their actuators removed, as used) or
+    "actuated" (state (iii) with the actuators still glued).
     """
     lookup = MapLookup(design_map) if (source == "map" and design_map is not None) else None
     return chain(units, snapped, source=source, lookup=lookup, start=start,
-                 start_angle=start_angle, **kw).xy
+                 start_angle=start_angle, state=state, **kw).xy
 
 
 def parse_state(state, n: int) -> list[bool]:
@@ -96,13 +105,14 @@ def parse_state(state, n: int) -> list[bool]:
     return out
 
 
-def all_states(units, source: str = "map", design_map=None, chains: bool = False, **kw) -> dict:
+def all_states(units, source: str = "map", design_map=None, chains: bool = False,
+               state: str | None = None, **kw) -> dict:
     """Every stable state of the array: {state string: (K, 2) base polyline in m} (or
     {state string: Chain} with chains=True).
 
     Units that are spacers have one state only, so there are 2ⁿ states for n arched units;
     their characters in the state string are always '0'. Ordered from all unsnapped upwards,
-    unit 1 being the most significant character.
+    unit 1 being the most significant character. `state`: as in `forward_kinematics`.
     """
     units, _ = _check(units, None)
     arched = [i for i, u in enumerate(units) if not u.is_spacer]
@@ -113,7 +123,7 @@ def all_states(units, source: str = "map", design_map=None, chains: bool = False
         for i, b in zip(arched, bits):
             snapped[i] = b
         key = "".join("1" if s else "0" for s in snapped)
-        ch = chain(units, snapped, source=source, lookup=lookup, **kw)
+        ch = chain(units, snapped, source=source, lookup=lookup, state=state, **kw)
         out[key] = ch if chains else ch.xy
     return out
 

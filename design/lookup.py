@@ -5,6 +5,12 @@ inverse design asks that the map does not answer directly: θ and S/L of a unit 
 the θ range in which units are bistable at given t/L and w/L, and the unit whose snapped base
 turns by a given angle over a given chord (the fixed point in L, since t/L and w/L depend on L).
 Everything here is dimensionless except `unit_for_arc` (SI).
+
+Every lookup takes ``state=``: "released" (state (iii) with the actuator and rollers removed,
+the unit as used in an array; the default) or "actuated" (the actuator still glued, the
+paper's definition); None means the lookup's own default (`MapLookup(dm, state=...)`), and
+when that is None too the map's default (released) — the state is then not passed to the map,
+so a wrapped map may set it.
 """
 
 from __future__ import annotations
@@ -49,10 +55,25 @@ def load_map(path=None):
         raise ValueError(f"cannot read design map {path}: {exc}") from None
 
 
-class MapLookup:
-    """Scalar lookups on a design map, cached; `dm` follows the `maps.DesignMap` API."""
+STATES = ("released", "actuated")
 
-    def __init__(self, dm=None):
+
+def check_state(state) -> str:
+    """``state`` if it is "released" or "actuated", else ValueError."""
+    if not isinstance(state, str) or state not in STATES:
+        raise ValueError(f"state must be 'released' (the unit with its actuator removed, the "
+                         f"default) or 'actuated' (actuator still glued); got {state!r}")
+    return state
+
+
+class MapLookup:
+    """Scalar lookups on a design map, cached; `dm` follows the `maps.DesignMap` API.
+
+    ``state``: the default state of every lookup ("released" or "actuated"; None: the map's
+    default, released)."""
+
+    def __init__(self, dm=None, state: str | None = None):
+        self.state = None if state is None else check_state(state)
         self.dm = default_map() if dm is None else dm
         self._scalar = lru_cache(maxsize=65536)(self._scalar_uncached)
         self._shape = lru_cache(maxsize=4096)(self._shape_uncached)
@@ -87,45 +108,79 @@ class MapLookup:
             return None
         return float(np.min(g)), float(np.max(g))
 
+    def _st(self, state):
+        return self.state if state is None else check_state(state)
+
+    @staticmethod
+    def _kw(state) -> dict:
+        return {} if state is None else {"state": state}
+
     # --- lookups ----------------------------------------------------------------------------
-    def theta_S(self, h_over_L: float, t_over_L: float, w_over_L: float):
-        """(θ in degrees, S/L) of the snapped unit; ValueError outside the map or if monostable."""
-        return self._scalar(_r(h_over_L), _r(t_over_L), _r(w_over_L))
+    def theta_S(self, h_over_L: float, t_over_L: float, w_over_L: float, state=None):
+        """(θ in degrees, S/L) of the snapped unit in ``state``; ValueError outside the map or
+        if not bistable there (for the released state: if the released unit is not)."""
+        return self._scalar(_r(h_over_L), _r(t_over_L), _r(w_over_L), self._st(state))[:2]
 
-    def base_shape(self, h_over_L: float, t_over_L: float, w_over_L: float) -> np.ndarray:
-        """Snapped base shape per unit length, (M, 2), from (0, 0) heading +x, arch side +z."""
-        return self._shape(_r(h_over_L), _r(t_over_L), _r(w_over_L))
-
-    def h_over_L_for_theta(self, theta_deg: float, t_over_L: float, w_over_L: float) -> float:
-        """h/L of the unit turning by θ (degrees, > 0) at the given t/L and w/L."""
-        value = self.dm.h_over_L_for_theta(theta_deg=float(theta_deg), t_over_L=float(t_over_L),
-                                           w_over_L=float(w_over_L))
-        value = float(np.asarray(value))
+    def theta_end(self, h_over_L: float, t_over_L: float, w_over_L: float, state=None) -> float:
+        """θ_end in degrees (angle between the base's start tangent and its chord, θ/2 for a
+        symmetric base) of the snapped unit in ``state``."""
+        value = self._scalar(_r(h_over_L), _r(t_over_L), _r(w_over_L), self._st(state))[2]
         if not math.isfinite(value):
-            raise ValueError(f"θ = {theta_deg:.3g}° is not reached by any bistable unit of the map "
-                             f"at t/L = {t_over_L:.4g}, w/L = {w_over_L:.4g}")
+            raise ValueError(f"the design map has no theta_end at h/L = {h_over_L:.4g}, "
+                             f"t/L = {t_over_L:.4g}, w/L = {w_over_L:.4g} (a schema-1 map?)")
         return value
 
-    def theta_range(self, t_over_L: float, w_over_L: float):
+    def base_shape(self, h_over_L: float, t_over_L: float, w_over_L: float,
+                   state=None) -> np.ndarray:
+        """Snapped base shape per unit length, (M, 2), from (0, 0) heading +x, arch side +z."""
+        return self._shape(_r(h_over_L), _r(t_over_L), _r(w_over_L), self._st(state))
+
+    def h_over_L_for_theta(self, theta_deg: float, t_over_L: float, w_over_L: float,
+                           state=None, angle: str = "theta") -> float:
+        """h/L of the unit turning by θ (degrees, > 0) at the given t/L and w/L in ``state``;
+        ``angle="theta_end"``: of the unit whose θ_end is ``theta_deg``."""
+        state = self._st(state)
+        kw = self._kw(state)
+        if angle != "theta":
+            kw["angle"] = angle
+        value = self.dm.h_over_L_for_theta(theta_deg=float(theta_deg), t_over_L=float(t_over_L),
+                                           w_over_L=float(w_over_L), **kw)
+        value = float(np.asarray(value))
+        if not math.isfinite(value):
+            raise ValueError(f"{angle} = {theta_deg:.3g}° is not reached by any bistable unit of "
+                             f"the map at t/L = {t_over_L:.4g}, w/L = {w_over_L:.4g} ({state or 'released'})")
+        return value
+
+    def h_over_L_for_theta_end(self, theta_end_deg: float, t_over_L: float, w_over_L: float,
+                               state=None) -> float:
+        """h/L of the unit whose θ_end (end tangent to chord, degrees) is ``theta_end_deg``."""
+        return self.h_over_L_for_theta(theta_end_deg, t_over_L, w_over_L, state=state,
+                                       angle="theta_end")
+
+    def theta_range(self, t_over_L: float, w_over_L: float, state=None):
         """(θ_min, θ_max, h/L at θ_min, h/L at θ_max) over the bistable units of the map at
         t/L, w/L: θ_min is where units stop being bistable. ValueError if there are none."""
-        return self._range(_r(t_over_L, 5), _r(w_over_L, 5))
+        return self._range(_r(t_over_L, 5), _r(w_over_L, 5), self._st(state))
 
     # --- uncached implementations -----------------------------------------------------------
-    def _scalar_uncached(self, h, t, w):
+    def _scalar_uncached(self, h, t, w, state):
         try:
-            res = self.dm.at(h_over_L=h, t_over_L=t, w_over_L=w)
+            res = self.dm.at(h_over_L=h, t_over_L=t, w_over_L=w, **self._kw(state))
         except (ValueError, KeyError, IndexError) as exc:
             raise ValueError(f"unit h/L = {h:.4g}, t/L = {t:.4g}, w/L = {w:.4g}: {exc}") from None
         theta, S = _get(res, "theta"), _get(res, "S")
+        try:
+            theta_end = _get(res, "theta_end")
+        except (AttributeError, KeyError):
+            theta_end = math.nan
         if not (math.isfinite(theta) and math.isfinite(S)):
             raise ValueError(f"unit h/L = {h:.4g}, t/L = {t:.4g}, w/L = {w:.4g} is not bistable "
-                             "in the design map (no second stable state)")
-        return theta, S
+                             f"in the design map ({state or 'released'} state)")
+        return theta, S, theta_end
 
-    def _shape_uncached(self, h, t, w):
+    def _shape_uncached(self, h, t, w, state):
         try:
-            xy = self.dm.base_shape(h_over_L=h, t_over_L=t, w_over_L=w)
+            xy = self.dm.base_shape(h_over_L=h, t_over_L=t, w_over_L=w, **self._kw(state))
         except (ValueError, KeyError, IndexError) as exc:
             raise ValueError(f"unit h/L = {h:.4g}, t/L = {t:.4g}, w/L = {w:.4g}: {exc}") from None
         xy = np.array(np.asarray(xy, dtype=float), copy=True)
@@ -135,7 +190,7 @@ class MapLookup:
         xy.setflags(write=False)
         return xy
 
-    def _theta_range_uncached(self, t, w):
+    def _theta_range_uncached(self, t, w, state):
         # Interpolation cells touching a monostable grid point are undefined, so the bistable
         # range is bounded by grid nodes: scanning the nodes is enough.
         hs = self.grid("h_over_L")
@@ -144,7 +199,7 @@ class MapLookup:
         ok = []
         for h in hs:
             try:
-                theta, _ = self.theta_S(h, t, w)
+                theta, _ = self.theta_S(h, t, w, state=state)
             except ValueError:
                 continue
             if theta > 0:
@@ -157,13 +212,13 @@ class MapLookup:
         return lo[0], hi[0], lo[1], hi[1]
 
     # --- a unit for a circular arc -----------------------------------------------------------
-    def unit_for_arc(self, theta_deg: float, chord: float, t: float, w: float):
+    def unit_for_arc(self, theta_deg: float, chord: float, t: float, w: float, state=None):
         """(L, h) in m of the unit whose snapped base turns by |θ| (degrees) over chord S (m);
         see `_unit_for_arc_uncached`."""
-        return self._arc(_r(abs(theta_deg)), _r(chord), _r(t), _r(w))
+        return self._arc(_r(abs(theta_deg)), _r(chord), _r(t), _r(w), self._st(state))
 
     def _unit_for_arc_uncached(self, theta_deg: float, chord: float, t: float, w: float,
-                               tol: float = 1e-10, max_iter: int = 50):
+                               state: str | None = None, tol: float = 1e-10, max_iter: int = 50):
         """(L, h) in m of the unit whose snapped base turns by |θ| (degrees) over chord S (m).
 
         θ → h/L by inverting the map at t/L, w/L; L = S / (S/L). t/L and w/L depend on L, so the
@@ -175,8 +230,8 @@ class MapLookup:
         for _ in range(max_iter):
             t_L, w_L = t / L, w / L
             self._check_tw(t_L, w_L, L)
-            h_L = self.h_over_L_for_theta(theta, t_L, w_L)
-            _, S_L = self.theta_S(h_L, t_L, w_L)
+            h_L = self.h_over_L_for_theta(theta, t_L, w_L, state=state)
+            _, S_L = self.theta_S(h_L, t_L, w_L, state=state)
             L_new = chord / S_L
             if abs(L_new - L) <= tol * L:
                 L = L_new
@@ -185,7 +240,7 @@ class MapLookup:
         else:
             raise ValueError(f"no fixed point for the unit turning {theta:.3g}° over "
                              f"{chord * 1e3:.4g} mm (L did not settle)")
-        h_L = self.h_over_L_for_theta(theta, t / L, w / L)
+        h_L = self.h_over_L_for_theta(theta, t / L, w / L, state=state)
         return L, h_L * L
 
     def _check_tw(self, t_L, w_L, L):

@@ -69,6 +69,8 @@ def plot_design(design, path, title: str | None = None) -> Path:
         ax.plot(design.points[:, 0] * 1e3, design.points[:, 1] * 1e3, "o", color="0.3", ms=4,
                 label="target points" if len(design.points) != len(design.control_points) else None)
     for j, (piece, u) in enumerate(zip(design.pieces, design.units)):
+        if not piece.arcs:
+            continue
         arc_xy = sample_arcs(piece.arcs, 33) * 1e3
         ax.plot(arc_xy[:, 0], arc_xy[:, 1], "--", lw=1.2, color="C2" if not u.is_spacer else "C3",
                 label=("biarcs (units)" if not u.is_spacer else "flat arcs (spacers)")
@@ -77,27 +79,48 @@ def plot_design(design, path, title: str | None = None) -> Path:
         ax.annotate(str(j + 1), m, textcoords="offset points", xytext=(0, 6), fontsize=8,
                     ha="center", color="C2" if not u.is_spacer else "C3")
     C = design.control_points * 1e3
-    ax.plot(C[:, 0], C[:, 1], "s", color="k", ms=5, mfc="none", label="control points")
+    if len(C):
+        ax.plot(C[:, 0], C[:, 1], "s", color="k", ms=5, mfc="none", label="control points")
     for p, a in zip(C, design.control_angles):
         d = 0.04 * design.target_length * 1e3
         ax.plot([p[0] - d * math.cos(a), p[0] + d * math.cos(a)],
                 [p[1] - d * math.sin(a), p[1] + d * math.sin(a)], "k-", lw=0.8)
     P = design.predicted * 1e3
-    ax.plot(P[:, 0], P[:, 1], "-", color="C0", lw=1.5, label="predicted (all snapped)")
+    ax.plot(P[:, 0], P[:, 1], "-", color="C0", lw=1.5, label="predicted (map, all snapped)")
     J = design.joints * 1e3
     ax.plot(J[:, 0], J[:, 1], "|", color="C0", ms=9)
+    for j, xy in enumerate(J[1:-1]):
+        ax.annotate(str(j + 2), xy, textcoords="offset points", xytext=(4, -8), fontsize=6,
+                    color="C0")
+    v = getattr(design, "verification", None)
+    if v is not None:
+        Q = v["xy"] * 1e3
+        ax.plot(Q[:, 0], Q[:, 1], ":", color="C3", lw=1.8,
+                label=f"simulated array ({v['status']})")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    ax.set_title(title or f"{len(design.units)} units; deviation max "
-                 f"{100 * design.max_deviation:.2f} %, RMS {100 * design.rms_deviation:.2f} % "
-                 f"of {design.target_length * 1e3:.0f} mm")
+    ax.set_title(title or _design_title(design))
     draw_flat(ax2, design.units)
     ax2.set_aspect("equal", adjustable="datalim")
     ax2.set_xlabel("x (mm), undeformed array")
     ax2.set_yticks([])
     return _save(fig, path)
+
+
+def _design_title(design) -> str:
+    n_arch = sum(not u.is_spacer for u in design.units)
+    text = (f"{n_arch} units, {len(design.units) - n_arch} spacers; predicted deviation max "
+            f"{100 * design.max_deviation:.2f} % of {design.target_length * 1e3:.0f} mm")
+    if getattr(design, "placement_mode", None):
+        text += f" ({design.placement_mode} placement)"
+    v = getattr(design, "verification", None)
+    if v is not None:
+        text += f"\nsimulated array: {100 * v['max_deviation']:.2f} %"
+    if getattr(design, "met", None) is False:
+        text += f"   TOLERANCE {100 * design.tol:.2f} % MISSED"
+    return text
 
 
 def _first(design, spacer: bool) -> int:

@@ -7,6 +7,9 @@ base shape per unit length times L, mirrored in z for side -1; its end angle is 
 
 Sources: ``"map"`` (interpolated in a design map, the default) or ``"simulate"`` (a direct
 simulation with `solver.unit.simulate_unit`, normalised the way the map is).
+
+States: ``state="released"`` (default: state (iii) with the actuator and rollers removed, the
+unit as used in an array) or ``"actuated"`` (the actuator still glued, the paper's state (iii)).
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from design.lookup import MapLookup
+from design.lookup import MapLookup, check_state
 from design.units import Unit
 
 SOURCES = ("map", "simulate")
@@ -38,18 +41,22 @@ def straight(L: float) -> UnitShape:
 
 
 def snapped_shape(unit: Unit, source: str = "map", lookup: MapLookup | None = None,
-                  E: float = E_DEFAULT, nodes=None) -> UnitShape:
-    """The snapped (state iii) base of `unit` in its own frame (m); straight for a spacer."""
+                  E: float = E_DEFAULT, nodes=None, state: str | None = None) -> UnitShape:
+    """The snapped (state iii) base of `unit` in its own frame (m); straight for a spacer.
+    ``state``: "released" (None: the default) or "actuated"."""
+    if state is not None:
+        check_state(state)
     if unit.is_spacer:
         return straight(unit.L)
     if source == "map":
         lookup = lookup or MapLookup()
         _check_b(unit, lookup)
         hL, tL, wL = unit.h / unit.L, unit.t / unit.L, unit.w / unit.L
-        theta, S = lookup.theta_S(hL, tL, wL)
-        xy = conform(np.array(lookup.base_shape(hL, tL, wL)), theta, S) * unit.L
+        theta, S = lookup.theta_S(hL, tL, wL, state=state)
+        xy = conform(np.array(lookup.base_shape(hL, tL, wL, state=state)), theta, S) * unit.L
     elif source == "simulate":
-        xy, theta = _simulated(unit.L, unit.h, unit.t, unit.w, unit.b, float(E), nodes)
+        xy, theta = _simulated(unit.L, unit.h, unit.t, unit.w, unit.b, float(E), nodes,
+                               state or "released")
         xy = xy * unit.L
     else:
         raise ValueError(f"source must be one of {SOURCES}, got {source!r}")
@@ -96,20 +103,28 @@ def normalise_base(xy: np.ndarray, theta_deg: float, L: float) -> np.ndarray:
 
 
 @lru_cache(maxsize=256)
-def _simulated(L, h, t, w, b, E, nodes):
-    """Direct simulation of one unit: (normalised base shape, θ in degrees)."""
+def _simulated(L, h, t, w, b, E, nodes, state="released"):
+    """Direct simulation of one unit: (normalised base shape, θ in degrees) of ``state``."""
     try:
         from solver.unit import UnitGeometry, simulate_unit
     except ImportError as exc:
         raise ValueError(f"source='simulate' needs solver.unit ({exc})") from None
-    result = simulate_unit(UnitGeometry(L=L, h=h, t=t, w=w, b=b, E=E), nodes=nodes)
+    result = simulate_unit(UnitGeometry(L=L, h=h, t=t, w=w, b=b, E=E), nodes=nodes,
+                           check_self_standing=(state == "released"))
+    what = (f"unit L = {L * 1e3:.4g} mm, h = {h * 1e3:.4g} mm, t = {t * 1e3:.4g} mm, "
+            f"w = {w * 1e3:.4g} mm")
     if not result.bistable or not math.isfinite(result.theta_deg):
-        raise ValueError(f"unit L = {L * 1e3:.4g} mm, h = {h * 1e3:.4g} mm, t = {t * 1e3:.4g} mm, "
-                         f"w = {w * 1e3:.4g} mm is not bistable in a direct simulation "
-                         f"({result.status})")
-    xy = normalise_base(result.base_shape, result.theta_deg, L)
+        raise ValueError(f"{what} is not bistable in a direct simulation ({result.status})")
+    if state == "released":
+        if not result.released:
+            raise ValueError(f"{what} is bistable only with its actuator glued: released, it "
+                             "does not stay snapped (use state='actuated' for the held state)")
+        base, theta = result.released["base_shape"], result.released["theta_deg"]
+    else:
+        base, theta = result.base_shape, result.theta_deg
+    xy = normalise_base(base, theta, L)
     xy.setflags(write=False)
-    return xy, float(result.theta_deg)
+    return xy, float(theta)
 
 
 def _check_b(unit: Unit, lookup: MapLookup) -> None:

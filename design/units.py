@@ -100,11 +100,27 @@ def spacer(L: float, t: float, w: float) -> Unit:
     return Unit(L=L, h=0.0, t=t, w=w, side=0)
 
 
-def write_units_csv(units, path) -> Path:
-    """Write `units.csv` (columns unit, L_mm, h_mm, t_mm, w_mm, side; unit numbered from 1)."""
+PLACEMENT_PREFIX = "# placement"
+
+
+def write_units_csv(units, path, placement=None) -> Path:
+    """Write `units.csv` (columns unit, L_mm, h_mm, t_mm, w_mm, side; unit numbered from 1).
+
+    `placement`: optional ``(x0_m, y0_m, angle_rad)``, the start point and start tangent of
+    unit 1 in the target's frame (a design's frame). It is written as a first comment line
+    ``# placement x0_mm=<g> y0_mm=<g> angle_deg=<g>`` that `read_placement` reads back, so that
+    `snapmorph fk` / `array` draw the units where the design put them.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    header = None
+    if placement is not None:
+        x0, y0, angle = _check_placement(placement)
+        header = (f"{PLACEMENT_PREFIX} x0_mm={x0 * 1e3:.12g} y0_mm={y0 * 1e3:.12g} "
+                  f"angle_deg={math.degrees(angle):.12g}")
     with path.open("w", newline="") as fh:
+        if header:
+            fh.write(header + "\n")
         writer = csv.writer(fh)
         writer.writerow(CSV_COLUMNS)
         for i, u in enumerate(units, start=1):
@@ -112,26 +128,121 @@ def write_units_csv(units, path) -> Path:
     return path
 
 
-def read_units_csv(path, b_over_L: float = 0.0) -> list[Unit]:
-    """Read `units.csv`; b (not a column) is set to b_over_L * L for arched units."""
+def _check_placement(placement):
+    try:
+        x0, y0, angle = (float(v) for v in placement)
+    except (TypeError, ValueError):
+        raise ValueError("placement must be (x0_m, y0_m, angle_rad), three numbers; "
+                         f"got {placement!r}") from None
+    if not all(math.isfinite(v) for v in (x0, y0, angle)):
+        raise ValueError(f"placement (x0_m, y0_m, angle_rad) must be finite; got {placement!r}")
+    return x0, y0, angle
+
+
+def read_placement(path):
+    """The placement line of a `units.csv`: ``(x0_m, y0_m, angle_rad)``, or None if absent."""
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"units file not found: {path}")
-    with path.open(newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    if not rows:
+    with path.open() as fh:
+        for n, line in enumerate(fh, start=1):
+            text = line.strip()
+            if not text:
+                continue
+            if not text.startswith("#"):
+                return None  # the placement line comes before the header
+            if not text.startswith(PLACEMENT_PREFIX):
+                continue
+            fields = {}
+            for item in text[len(PLACEMENT_PREFIX):].split():
+                key, sep, value = item.partition("=")
+                if sep:
+                    fields[key] = value
+            try:
+                x0 = float(fields["x0_mm"]) * 1e-3
+                y0 = float(fields["y0_mm"]) * 1e-3
+                angle = math.radians(float(fields["angle_deg"]))
+            except (KeyError, ValueError):
+                raise ValueError(f"{path}, line {n}: expected '{PLACEMENT_PREFIX} x0_mm=<number> "
+                                 f"y0_mm=<number> angle_deg=<number>', got {text!r}") from None
+            if not all(math.isfinite(v) for v in (x0, y0, angle)):
+                raise ValueError(f"{path}, line {n}: placement values must be finite; "
+                                 f"got {text!r}")
+            return x0, y0, angle
+    return None
+
+
+def read_units_csv(path, b_over_L: float = 0.0) -> list[Unit]:
+    """Read `units.csv`; b (not a column) is set to b_over_L * L for arched units.
+
+    Lines starting with ``#`` (e.g. the placement line) are skipped. A spacer is a row with
+    ``h_mm = 0`` and ``side = 0``; an arched unit has ``h_mm > 0`` and ``side`` +1 or -1.
+    Errors name the file, the line, the column and its unit (mm).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"units file not found: {path}")
+    try:
+        b_over_L = float(b_over_L)
+    except (TypeError, ValueError):
+        raise ValueError(f"b_over_L must be a number in [0, 0.5); got {b_over_L!r}") from None
+    if not (0.0 <= b_over_L < 0.5):
+        raise ValueError(f"b_over_L must be in [0, 0.5); got {b_over_L}")
+    try:
+        with path.open(newline="") as fh:
+            numbered = [(n, line) for n, line in enumerate(fh, start=1)
+                        if line.strip() and not line.lstrip().startswith("#")]
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a text CSV file") from None
+    if not numbered:
         raise ValueError(f"{path}: no units (expected a header {','.join(CSV_COLUMNS)} and rows)")
-    missing = [c for c in CSV_COLUMNS if c not in rows[0]]
+    reader = csv.reader(line for _, line in numbered)
+    rows = list(reader)
+    header = [c.strip() for c in rows[0]]
+    missing = [c for c in CSV_COLUMNS if c not in header]
     if missing:
         raise ValueError(f"{path}: missing column(s) {', '.join(missing)}; "
                          f"expected {','.join(CSV_COLUMNS)}")
+    if len(rows) < 2:
+        raise ValueError(f"{path}: no units (only a header)")
     units = []
-    for n, row in enumerate(rows, start=2):
+    for (n, _), row in zip(numbered[1:], rows[1:]):
+        if len(row) != len(header):
+            raise ValueError(f"{path}, line {n}: {len(row)} fields, expected {len(header)} "
+                             f"({','.join(header)})")
+        rec = dict(zip(header, (v.strip() for v in row)))
+        mm = {}
+        for c in ("L_mm", "h_mm", "t_mm", "w_mm"):
+            try:
+                v = float(rec[c])
+            except ValueError:
+                raise ValueError(f"{path}, line {n}: not a number in {c} (a length in mm, "
+                                 f"> 0): {rec[c]!r}") from None
+            if not math.isfinite(v):
+                raise ValueError(f"{path}, line {n}: {c} must be finite (mm); got {rec[c]!r}")
+            mm[c] = v
+        for c in ("L_mm", "t_mm", "w_mm"):
+            if mm[c] <= 0:
+                raise ValueError(f"{path}, line {n}: {c} must be > 0 mm; got {rec[c]}")
+        if mm["h_mm"] < 0:
+            raise ValueError(f"{path}, line {n}: h_mm must be >= 0 mm (0 for a spacer); "
+                             f"got {rec['h_mm']}")
+        side_text = rec["side"]
         try:
-            L, h, t, w = (float(row[c]) * 1e-3 for c in ("L_mm", "h_mm", "t_mm", "w_mm"))
-            side = int(float(row["side"]))
-        except (TypeError, ValueError):
-            raise ValueError(f"{path}, line {n}: not a number in {dict(row)}") from None
+            side_value = float(side_text)
+        except ValueError:
+            side_value = math.nan
+        if side_value not in (1.0, -1.0, 0.0):
+            raise ValueError(f"{path}, line {n}: side must be 1, -1 (arch on the left / right) "
+                             f"or 0 (spacer); got {side_text!r}")
+        side = int(side_value)
+        if mm["h_mm"] == 0 and side != 0:
+            raise ValueError(f"{path}, line {n}: h_mm = 0 is a spacer, whose side must be 0; "
+                             f"got side = {side_text} (give h_mm > 0 for an arched unit)")
+        if mm["h_mm"] > 0 and side == 0:
+            raise ValueError(f"{path}, line {n}: side = 0 marks a spacer, whose h_mm must be 0; "
+                             f"got h_mm = {rec['h_mm']} (give side 1 or -1 for an arched unit)")
+        L, h, t, w = (mm[c] * 1e-3 for c in ("L_mm", "h_mm", "t_mm", "w_mm"))
         try:
             units.append(Unit(L=L, h=h, t=t, w=w, side=side, b=b_over_L * L if h > 0 else 0.0))
         except ValueError as exc:

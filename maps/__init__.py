@@ -5,6 +5,8 @@
     dm.at(h_over_L=0.2, t_over_L=0.005, w_over_L=0.05)["theta"]
 """
 
-from maps.designmap import CI_MAP, DEFAULT_MAP, DesignMap, MapDomainError, MapFileError
+from maps.designmap import (CI_MAP, DEFAULT_MAP, STATE_NAMES, DesignMap, MapDomainError,
+                            MapFileError, OldSchemaWarning)
 
-__all__ = ["DesignMap", "MapDomainError", "MapFileError", "DEFAULT_MAP", "CI_MAP"]
+__all__ = ["DesignMap", "MapDomainError", "MapFileError", "OldSchemaWarning", "STATE_NAMES",
+           "DEFAULT_MAP", "CI_MAP"]

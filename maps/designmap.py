@@ -1,4 +1,4 @@
-"""`DesignMap`: load a schema-1 design map and look values up by interpolation.
+"""`DesignMap`: load a design map (schema 2, or 1 read-only) and look values up by interpolation.
 
 Interpolation is piecewise linear on the grid cell around the query (scipy
 `RegularGridInterpolator`), in the coordinates (h/L, log t/L, log w/L), and of log(F_cr) for the
@@ -7,6 +7,12 @@ validity mask: S, theta, d_unstable, d_second, the energies and the base shape e
 bistable points (status ok); F_cr and d_cr also at monostable ones. A query whose cell gives
 weight to an invalid grid point raises `MapDomainError` (or returns NaN with allow_nan=True):
 NaN holes never leak into valid neighbours.
+
+States: every lookup of S, theta, theta_end and the base shape takes ``state=``: "released"
+(default: state (iii) with the actuator and rollers removed, the unit as used in an array;
+defined where the released unit is still bistable, self_standing = 1) or "actuated" (state
+(iii) with the actuator still glued, the paper's definition). A schema-1 map has no released
+state: it loads with a warning and answers only ``state="actuated"``.
 """
 
 from __future__ import annotations
@@ -18,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.schema import (
-    BISTABLE_ONLY, FLAG_VARS, GRID_DIMS, REQUIRED_ATTRS, REQUIRED_VARS, SCHEMA_VERSION,
-    STATUS_CODES,
+    BISTABLE_ONLY, FLAG_VARS, GRID_DIMS, OPTIONAL_VARS, READABLE_VERSIONS, RELEASED_VARS,
+    REQUIRED_ATTRS, REQUIRED_VARS, REQUIRED_VARS_V1, SCHEMA_VERSION, STATES, STATUS_CODES,
 )
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
@@ -38,6 +44,24 @@ class MapFileError(ValueError):
 
 class MapDomainError(ValueError):
     """A query outside the grid, or touching monostable/failed grid points."""
+
+
+class OldSchemaWarning(UserWarning):
+    """A schema-1 map was loaded: it has no released state."""
+
+
+STATE_NAMES = tuple(STATES)  # ("released", "actuated")
+#: per-state names of `at`'s outputs -> the map variables they come from
+_STATE_VARS = {state: dict(zip(("S", "theta", "theta_end"), names[:3]))
+               for state, names in STATES.items()}
+
+
+def check_state(state) -> str:
+    """``state`` if it is "released" or "actuated", else ValueError."""
+    if not isinstance(state, str) or state not in STATES:
+        raise ValueError(f"state must be one of {', '.join(map(repr, STATES))} (the released unit, "
+                         f"default, or state (iii) with the actuator still glued); got {state!r}")
+    return state
 
 
 def _fail(path, problem):
@@ -67,16 +91,18 @@ def _validate(ds, path) -> None:
     if version > SCHEMA_VERSION:
         _fail(path, f"schema version {version} is newer than this snapmorph reads "
                     f"({SCHEMA_VERSION}); upgrade snapmorph or rebuild the map")
-    if version != SCHEMA_VERSION:
-        _fail(path, f"schema version {version} is not supported (this snapmorph reads {SCHEMA_VERSION})")
-    missing = [v for v in REQUIRED_VARS if v not in ds.variables]
+    if version not in READABLE_VERSIONS:
+        _fail(path, f"schema version {version} is not supported (this snapmorph reads "
+                    f"{', '.join(map(str, READABLE_VERSIONS))})")
+    required = REQUIRED_VARS if version >= 2 else REQUIRED_VARS_V1
+    missing = [v for v in required if v not in ds.variables]
     if missing:
         _fail(path, f"missing variables {missing}")
     missing = [a for a in REQUIRED_ATTRS if a not in ds.attrs]
     if missing:
         _fail(path, f"missing global attributes {missing}")
-    for name in REQUIRED_VARS:
-        want = GRID_DIMS + (("sample", "xz") if name == "base_shape" else ())
+    for name in required:
+        want = GRID_DIMS + (("sample", "xz") if name.startswith("base_shape") else ())
         if ds[name].dims != want:
             _fail(path, f"variable {name} has dimensions {ds[name].dims}, expected {want}")
     for dim in GRID_DIMS:
@@ -94,22 +120,29 @@ def _validate(ds, path) -> None:
     pending = int(np.count_nonzero(status < 0))
     if pending:
         _fail(path, f"{pending} points are still pending: a partial build, not a finished map")
+    return version
 
 
 class DesignMap:
     """An interpolated design map. Use `DesignMap.load(path=None)`.
 
     Every length is over the base length L; `F_cr` is F_cr L^2 / (E I_arch) with
-    I_arch = w t^3 / 12; `theta` is in degrees.
+    I_arch = w t^3 / 12; `theta` and `theta_end` are in degrees. S, theta, theta_end and the
+    base shape come from the released state (iii) unless ``state="actuated"``.
     """
 
-    #: variables returned by `at`
+    #: variables returned by `at` (S, theta, theta_end of the state asked for)
     SCALARS = ("F_cr", "d_cr", *BISTABLE_ONLY, *FLAG_VARS)
 
     def __init__(self, ds, path=None):
         from scipy.interpolate import RegularGridInterpolator as RGI
 
-        _validate(ds, path)
+        self.schema_version = _validate(ds, path)
+        if self.schema_version < 2:
+            warnings.warn(f"design map {path or '<in memory>'} has schema version "
+                          f"{self.schema_version}: it holds no released state (only "
+                          f"state='actuated' lookups work) and no theta_end; rebuild it with "
+                          f"`make maps` / `snapmorph maps build`", OldSchemaWarning, stacklevel=3)
         self.dataset = ds
         self.path = Path(path) if path is not None else None
         self._axes = tuple(np.asarray(ds[d].values, dtype=float) for d in GRID_DIMS)
@@ -117,11 +150,16 @@ class DesignMap:
         self._icoords = (self._axes[0], np.log(self._axes[1]), np.log(self._axes[2]))
         self._status = np.asarray(ds["status"].values)
         ok = self._status == 0
-        groups = {"F": list(_F_VARS), "bi": list(BISTABLE_ONLY)}
+        standing = ok & (np.asarray(ds["self_standing"].values) == 1)
+        bistable_vars = [v for v in BISTABLE_ONLY if v in ds.variables]
+        groups = {"F": (list(_F_VARS), ok | (self._status == 1) | (self._status == 5)),
+                  "bi": (bistable_vars, ok.copy())}
+        if self.schema_version >= 2:
+            groups["rel"] = (list(RELEASED_VARS), standing.copy())
         self._interp = {}
-        for group, names in groups.items():
+        self._group_of = {}
+        for group, (names, valid) in groups.items():
             vals = []
-            valid = ok | (self._status == 1) if group == "F" else ok.copy()
             for name in names:
                 v = np.asarray(ds[name].values, dtype=float)
                 if name in _LOG_VARS:
@@ -129,8 +167,10 @@ class DesignMap:
                         v = np.log(v)
                 valid &= np.isfinite(v)
                 vals.append(v)
-            if group == "bi":
-                shape = np.asarray(ds["base_shape"].values, dtype=float)
+                self._group_of[name] = group
+            shape_var = {"bi": "base_shape", "rel": "base_shape_released"}.get(group)
+            if shape_var is not None:
+                shape = np.asarray(ds[shape_var].values, dtype=float)
                 valid &= np.all(np.isfinite(shape), axis=(-2, -1))
             values = np.where(valid[..., None], np.stack(vals, axis=-1), 0.0)
             self._interp[group] = (
@@ -140,13 +180,33 @@ class DesignMap:
                     fill_value=np.nan),
                 valid,
             )
-        valid_bi = self._interp["bi"][3]
-        shape = np.where(valid_bi[..., None, None], np.asarray(ds["base_shape"].values, float), 0.0)
-        self._shape_rgi = RGI(self._icoords, shape, method="linear", bounds_error=False, fill_value=np.nan)
+        self._shape_rgi = {}
+        for state, group in (("actuated", "bi"), ("released", "rel")):
+            if group not in self._interp:
+                continue
+            valid = self._interp[group][3]
+            var = STATES[state][3]
+            shape = np.where(valid[..., None, None], np.asarray(ds[var].values, float), 0.0)
+            self._shape_rgi[state] = (group, RGI(self._icoords, shape, method="linear",
+                                                 bounds_error=False, fill_value=np.nan))
         # flag consensus: the fraction of stencil weight on each value -1, 0, 1
         ind = [(np.asarray(ds[f].values) == v) for f in FLAG_VARS for v in (-1, 0, 1)]
         self._flag_rgi = RGI(self._icoords, np.stack(ind, axis=-1).astype(float), method="linear",
                              bounds_error=False, fill_value=np.nan)
+
+    @property
+    def states(self) -> tuple:
+        """The states this map can answer: ("released", "actuated"), or ("actuated",) for a
+        schema-1 map."""
+        return STATE_NAMES if self.schema_version >= 2 else ("actuated",)
+
+    def _state(self, state) -> str:
+        state = check_state(state)
+        if state not in self.states:
+            raise MapDomainError(
+                f"design map {self.path or '<in memory>'} (schema {self.schema_version}) has no "
+                f"{state} state; rebuild it (`make maps`) or pass state='actuated'")
+        return state
 
     # ---------------------------------------------------------------- loading
     @classmethod
@@ -250,6 +310,8 @@ class DesignMap:
                 f"w/L={math.exp(q[2]):.6g}: the interpolation cell touches grid points that are "
                 f"{self._stencil_status(q)} (only ok points count"
                 + ("; F_cr and d_cr also use monostable ones" if group == "F" else "")
+                + ("; the released state also needs self_standing = 1, a released unit that "
+                   "is still bistable" if group == "rel" else "")
                 + "); pass allow_nan=True to get NaN")
         out = {}
         for j, name in enumerate(names):
@@ -261,17 +323,25 @@ class DesignMap:
     def _scalar(v):
         return v[()] if isinstance(v, np.ndarray) and v.ndim == 0 else v
 
-    def at(self, h_over_L, t_over_L, w_over_L, allow_nan: bool = False) -> dict:
+    def at(self, h_over_L, t_over_L, w_over_L, allow_nan: bool = False,
+           state: str = "released") -> dict:
         """Interpolated values of every scalar variable at (h/L, t/L, w/L) (broadcast arrays).
 
-        Returns {name: value} for F_cr, d_cr, d_unstable, d_second, S, theta, energy_barrier,
-        energy_stored (floats, dimensionless, theta in degrees) and bistable, self_standing,
-        bifurcation (int8: the common value of the grid points around the query, -1 if they
-        differ). Raises MapDomainError outside the grid, or where a value is undefined
-        (monostable/failed grid points around the query) unless allow_nan=True.
+        Returns {name: value} for F_cr, d_cr, d_unstable, d_second, S, theta, theta_end,
+        energy_barrier, energy_stored (floats, dimensionless, angles in degrees) and bistable,
+        self_standing, bifurcation (int8: the common value of the grid points around the
+        query, -1 if they differ). S, theta and theta_end are those of ``state``: "released"
+        (default; defined where the released unit is still bistable) or "actuated". Raises
+        MapDomainError outside the grid, or where a value is undefined (monostable/failed/not
+        self-standing grid points around the query) unless allow_nan=True.
         """
+        state = self._state(state)
         shape, x = self._points(h_over_L, t_over_L, w_over_L)
         out = {**self._group("F", shape, x, allow_nan), **self._group("bi", shape, x, allow_nan)}
+        if state == "released":
+            rel = self._group("rel", shape, x, allow_nan)
+            for key, var in _STATE_VARS["released"].items():
+                out[key] = rel[var]
         frac = self._flag_rgi(x)
         for j, name in enumerate(FLAG_VARS):
             f = frac[:, 3 * j:3 * j + 3]
@@ -279,29 +349,43 @@ class DesignMap:
             for k, v in enumerate((-1, 0, 1)):
                 val[f[:, k] >= 1.0 - _W_TOL] = v
             out[name] = val.reshape(shape)
-        return {name: self._scalar(out[name]) for name in self.SCALARS}
+        return {name: self._scalar(out[name]) for name in self.SCALARS if name in out}
 
-    def value(self, name: str, h_over_L, t_over_L, w_over_L, allow_nan: bool = False):
-        """One interpolated variable (see `at`)."""
-        if name not in self.SCALARS:
-            raise ValueError(f"name must be one of {self.SCALARS}, got {name!r}")
+    def value(self, name: str, h_over_L, t_over_L, w_over_L, allow_nan: bool = False,
+              state: str = "released"):
+        """One interpolated variable (see `at`); S, theta and theta_end of ``state``. The map's
+        own names (S_released, theta_released, theta_end_released) are accepted too."""
+        names = (*self.SCALARS, *RELEASED_VARS)
+        if name not in names:
+            raise ValueError(f"name must be one of {names}, got {name!r}")
+        state = self._state(state)
+        if name in RELEASED_VARS:
+            state = self._state("released")
         shape, x = self._points(h_over_L, t_over_L, w_over_L)
         if name in FLAG_VARS:
-            return self.at(h_over_L, t_over_L, w_over_L, allow_nan=True)[name]
-        group = "F" if name in _F_VARS else "bi"
-        return self._scalar(self._group(group, shape, x, allow_nan)[name])
+            return self.at(h_over_L, t_over_L, w_over_L, allow_nan=True, state="actuated")[name]
+        var = _STATE_VARS[state].get(name, name)
+        if var not in self._group_of:
+            raise MapDomainError(f"design map {self.path or '<in memory>'} (schema "
+                                 f"{self.schema_version}) has no variable {var!r}; rebuild it")
+        group = self._group_of[var]
+        return self._scalar(self._group(group, shape, x, allow_nan)[var])
 
-    def base_shape(self, h_over_L, t_over_L, w_over_L, allow_nan: bool = False) -> np.ndarray:
-        """Base centreline in state (iii), per unit length: (M, 2) of (x, z) / L (or (..., M, 2)
-        for array queries), starting at (0, 0) with the start tangent along +x."""
+    def base_shape(self, h_over_L, t_over_L, w_over_L, allow_nan: bool = False,
+                   state: str = "released") -> np.ndarray:
+        """Base centreline in state (iii) (released by default, or ``state="actuated"``), per
+        unit length: (M, 2) of (x, z) / L (or (..., M, 2) for array queries), starting at
+        (0, 0) with the start tangent along +x."""
+        state = self._state(state)
         shape, x = self._points(h_over_L, t_over_L, w_over_L)
-        _, _, bad_rgi, _ = self._interp["bi"]
+        group, rgi = self._shape_rgi[state]
+        _, _, bad_rgi, _ = self._interp[group]
         wbad = bad_rgi(x)
         bad = wbad > _W_TOL
         if np.any(bad) and not allow_nan:
-            self._group("bi", shape, x, allow_nan=False)  # raises with the standard message
+            self._group(group, shape, x, allow_nan=False)  # raises with the standard message
         with np.errstate(invalid="ignore", divide="ignore"):
-            out = self._shape_rgi(x) / (1.0 - wbad)[:, None, None]
+            out = rgi(x) / (1.0 - wbad)[:, None, None]
         out[bad] = np.nan
         return out.reshape(*shape, self.samples, 2)
 
@@ -318,17 +402,19 @@ class DesignMap:
         return self._scalar(np.asarray(f * E * (w * t**3 / 12.0) / L**2))
 
     # ---------------------------------------------------------------- along h
-    def _theta_column(self, t_over_L, w_over_L):
-        """theta (deg) at every grid h/L for one (t, w), NaN where undefined."""
+    def _theta_column(self, t_over_L, w_over_L, state="released", angle="theta"):
+        """``angle`` (theta or theta_end, deg) at every grid h/L for one (t, w), NaN where
+        undefined."""
         t = float(t_over_L)
         w = float(w_over_L)
         h = self._axes[0]
-        th = self.value("theta", h, np.full_like(h, t), np.full_like(h, w), allow_nan=True)
+        th = self.value(angle, h, np.full_like(h, t), np.full_like(h, w), allow_nan=True,
+                        state=state)
         return h, np.asarray(th)
 
-    def _runs(self, t_over_L, w_over_L):
-        """Contiguous runs of grid h/L where theta is defined: list of (i0, i1) inclusive."""
-        h, th = self._theta_column(t_over_L, w_over_L)
+    def _runs(self, t_over_L, w_over_L, state="released", angle="theta"):
+        """Contiguous runs of grid h/L where the angle is defined: list of (i0, i1) inclusive."""
+        h, th = self._theta_column(t_over_L, w_over_L, state, angle)
         ok = np.isfinite(th)
         runs, i = [], 0
         while i < ok.size:
@@ -342,42 +428,63 @@ class DesignMap:
                 i += 1
         return h, th, runs
 
-    def _where(self, t_over_L, w_over_L):
-        return f"t/L={float(t_over_L):g}, w/L={float(w_over_L):g}"
+    def _where(self, t_over_L, w_over_L, state="released"):
+        return f"t/L={float(t_over_L):g}, w/L={float(w_over_L):g} ({state} state)"
 
-    def bistable_boundary(self, t_over_L, w_over_L) -> float:
-        """Smallest grid h/L from which S, theta, ... are defined at (t/L, w/L); the true
-        bistability boundary lies within one h/L grid step below it."""
-        h, th, runs = self._runs(t_over_L, w_over_L)
+    @staticmethod
+    def _check_angle(angle):
+        if angle not in ("theta", "theta_end"):
+            raise ValueError(f"angle must be 'theta' (total turning between the end tangents) or "
+                             f"'theta_end' (end tangent to chord); got {angle!r}")
+        return angle
+
+    def bistable_boundary(self, t_over_L, w_over_L, state: str = "released") -> float:
+        """Smallest grid h/L from which S, theta, ... of ``state`` are defined at (t/L, w/L);
+        the true boundary lies within one h/L grid step below it."""
+        state = self._state(state)
+        h, th, runs = self._runs(t_over_L, w_over_L, state)
         if not runs:
-            raise MapDomainError(f"no bistable unit in the map at {self._where(t_over_L, w_over_L)}")
+            raise MapDomainError(f"no bistable unit in the map at {self._where(t_over_L, w_over_L, state)}")
         return float(h[runs[0][0]])
 
-    def theta_range(self, t_over_L, w_over_L) -> tuple[float, float]:
-        """(min, max) theta in degrees over the map's h/L range at (t/L, w/L). If failed grid
-        points leave holes, some angles inside are not reachable (the inverse lookup says which)."""
-        h, th, runs = self._runs(t_over_L, w_over_L)
+    def theta_range(self, t_over_L, w_over_L, state: str = "released",
+                    angle: str = "theta") -> tuple[float, float]:
+        """(min, max) of ``angle`` (theta, or theta_end) in degrees over the map's h/L range at
+        (t/L, w/L). If failed grid points leave holes, some angles inside are not reachable
+        (the inverse lookup says which)."""
+        state = self._state(state)
+        h, th, runs = self._runs(t_over_L, w_over_L, state, self._check_angle(angle))
         if not runs:
-            raise MapDomainError(f"no bistable unit in the map at {self._where(t_over_L, w_over_L)}")
+            raise MapDomainError(f"no bistable unit in the map at {self._where(t_over_L, w_over_L, state)}")
         return float(np.nanmin(th)), float(np.nanmax(th))
 
-    def h_over_L_for_theta(self, theta_deg, t_over_L, w_over_L):
+    def h_over_L_for_theta_end(self, theta_end_deg, t_over_L, w_over_L, state: str = "released"):
+        """h/L giving the end angle theta_end_deg (degrees, end tangent to chord; the paper's
+        maps' convention, most likely) at (t/L, w/L). See `h_over_L_for_theta`."""
+        return self.h_over_L_for_theta(theta_end_deg, t_over_L, w_over_L, state=state,
+                                       angle="theta_end")
+
+    def h_over_L_for_theta(self, theta_deg, t_over_L, w_over_L, state: str = "released",
+                           angle: str = "theta"):
         """h/L giving the signed angle theta_deg (degrees) at (t/L, w/L): a root of the
-        interpolated theta(h/L). If theta is not monotone, the smallest such h/L. Broadcasts;
-        raises MapDomainError when theta is outside the reachable range (which it states)."""
+        interpolated theta(h/L) of ``state`` (``angle="theta_end"``: of theta_end). If it is not
+        monotone, the smallest such h/L. Broadcasts; raises MapDomainError when the angle is
+        outside the reachable range (which it states)."""
         from scipy.optimize import brentq
 
+        state = self._state(state)
+        angle = self._check_angle(angle)
         th_q, t_q, w_q = np.broadcast_arrays(*(np.asarray(v, float) for v in (theta_deg, t_over_L, w_over_L)))
         out = np.empty(th_q.shape)
         for k in np.ndindex(th_q.shape):
             target, t, w = float(th_q[k]), float(t_q[k]), float(w_q[k])
             self._points(self._axes[0][0], t, w)  # range check of t and w
-            h, th, runs = self._runs(t, w)
-            where = self._where(t, w)
+            h, th, runs = self._runs(t, w, state, angle)
+            where = self._where(t, w, state)
             if not runs:
                 raise MapDomainError(f"no bistable unit in the map at {where}")
             if not np.isfinite(target):
-                raise ValueError(f"theta_deg must be finite, got {target!r}")
+                raise ValueError(f"{angle}_deg must be finite, got {target!r}")
             found = None
             for i0, i1 in runs:
                 if i0 == i1:
@@ -392,7 +499,7 @@ class DesignMap:
                     elif b == 0:
                         found = h[i + 1]
                     elif a * b < 0:
-                        fn = lambda x: float(self.value("theta", x, t, w)) - target  # noqa: E731
+                        fn = lambda x: float(self.value(angle, x, t, w, state=state)) - target  # noqa: E731
                         found = brentq(fn, h[i], h[i + 1], xtol=1e-12, rtol=1e-12)
                     if found is not None:
                         break
@@ -401,6 +508,6 @@ class DesignMap:
             if found is None:
                 spans = "; ".join(f"{np.nanmin(th[i0:i1 + 1]):.4g} to {np.nanmax(th[i0:i1 + 1]):.4g} deg "
                                   f"(h/L {h[i0]:g} to {h[i1]:g})" for i0, i1 in runs)
-                raise MapDomainError(f"theta_deg = {target:g} is outside the range reachable at {where}: {spans}")
+                raise MapDomainError(f"{angle} = {target:g} deg is outside the range reachable at {where}: {spans}")
             out[k] = found
         return self._scalar(out)

@@ -44,7 +44,7 @@ def _away_from_boundary(dm, h, t, w) -> bool:
     # theta defined on the cell and on the cells one h step below and above
     step = np.diff(dm.h_over_L).max()
     hs = np.clip([h - step, h, h + step], dm.h_over_L[0], dm.h_over_L[-1])
-    v = dm.value("theta", hs, t, w, allow_nan=True)
+    v = dm.value("theta", hs, t, w, allow_nan=True, state="actuated")
     return bool(np.all(np.isfinite(v)))
 
 
@@ -90,7 +90,7 @@ def measure(dm, n: int = 50, seed: int = 0, solve=None, max_tries: int = 100000)
         if rec["status"] != 0:
             skipped += 1
             continue
-        v = dm.at(h, t, w)
+        v = dm.at(h, t, w, state="actuated")
         pts.append((h, t, w))
         th.append(v["theta"] - rec["theta"])
         S.append((v["S"] - rec["S"]) / rec["S"])

@@ -1,49 +1,65 @@
 """Result blocks and the batch task that runs on a dask worker.
 
-A *block* is a dict of arrays for a set of points: "index" (int64 flat grid index), one array
-per schema variable (floats, int8 flags and status), "base_shape" (n, M, 2), "solve_time" (s)
-and "message" (str, why a point failed). Blocks are what tasks return, what checkpoint files
-hold, and (for all points) what the driver assembles into the dataset.
+A *block* is a dict of arrays for a set of points: "index" (int64 flat grid index), "coords"
+(n, ndim) the points' grid values, one array per schema variable (floats, int8 flags and
+status), the array variables (n, *extra shape; the unit's "base_shape" (n, M, 2)),
+"solve_time" (s) and "message" (str, why a point failed). Blocks are what tasks return, what
+checkpoint files hold, and (for all points) what the driver assembles into the dataset. The keys
+of a kind's blocks are `SolverSpec.block_keys()`; the functions without a `spec` argument are
+the planar unit's (kept for callers of the schema-1 API).
 """
 
 from __future__ import annotations
 
-import importlib
 import time
 
 import numpy as np
 
-from pipeline.point import finalise_record, empty_record
-from pipeline.schema import FLAG_VARS, FLOAT_VARS, NOT_CONVERGED, PENDING
+from pipeline.schema import FLAG_VARS, FLOAT_VARS, PENDING
+from pipeline.solvers import resolve
 
 INT_VARS = (*FLAG_VARS, "status")
 BLOCK_KEYS = ("index", *FLOAT_VARS, *INT_VARS, "base_shape", "solve_time", "message")
 
 
-def empty_block(indices, samples: int) -> dict:
-    """A block for `indices` with every point pending (status -1) and NaN fields."""
+def _unit():
+    from pipeline.solvers import get_spec
+
+    return get_spec("unit")
+
+
+def new_block(spec, indices, options: dict, coords=None) -> dict:
+    """A block of kind `spec` for `indices`, every point pending (status -1), NaN fields."""
     idx = np.asarray(indices, dtype=np.int64)
     n = idx.size
     block = {"index": idx}
-    for name in FLOAT_VARS:
+    block["coords"] = (np.full((n, len(spec.dims)), np.nan) if coords is None
+                       else np.asarray(coords, dtype=float).reshape(n, len(spec.dims)).copy())
+    for name in spec.float_vars:
         block[name] = np.full(n, np.nan)
-    for name in INT_VARS:
+    for name in spec.int_vars:
         block[name] = np.full(n, -1, dtype=np.int8)
-    block["bistable"][:] = 0
+    if "bistable" in block:
+        block["bistable"][:] = 0
     block["status"][:] = PENDING
-    block["base_shape"] = np.full((n, samples, 2), np.nan)
+    for name in spec.array_vars:
+        block[name] = np.full((n, *spec.array_shape(name, options)), np.nan)
     block["solve_time"] = np.full(n, np.nan)
     block["message"] = np.array([""] * n, dtype=object)
     return block
 
 
+def empty_block(indices, samples: int) -> dict:
+    """A planar-unit block for `indices` with every point pending (status -1) and NaN fields."""
+    return new_block(_unit(), indices, {"samples": samples})
+
+
 def put(block: dict, k: int, rec: dict, solve_time: float) -> None:
     """Store the (finalised) record `rec` as row k of `block`."""
-    for name in FLOAT_VARS:
-        block[name][k] = rec[name]
-    for name in INT_VARS:
-        block[name][k] = rec[name]
-    block["base_shape"][k] = rec["base_shape"]
+    for key, arr in block.items():
+        if key in ("index", "coords", "solve_time", "message"):
+            continue
+        arr[k] = rec[key]
     block["solve_time"][k] = solve_time
     block["message"][k] = rec.get("message", "")
 
@@ -51,20 +67,71 @@ def put(block: dict, k: int, rec: dict, solve_time: float) -> None:
 def merge(total: dict, block: dict) -> None:
     """Copy the rows of `block` into `total` (a block over all points, index = arange(N))."""
     idx = block["index"]
-    for key in BLOCK_KEYS[1:]:
-        total[key][idx] = block[key]
+    for key, arr in total.items():
+        if key != "index" and key in block:
+            arr[idx] = block[key]
+
+
+def check_block(block: dict, spec, options: dict, points: np.ndarray) -> None:
+    """Raise ValueError unless `block` is a well-formed, plausible block of kind `spec` for the
+    grid whose points are `points` ((N, ndim)): every key with its shape; indices unique and in
+    range; coordinates equal to the grid's at those indices (catches shifted indices); known,
+    non-pending status codes; flags -1/0/1; at status ok every required variable finite."""
+    keys = spec.block_keys()
+    missing = [k for k in keys if k not in block]
+    if missing:
+        raise ValueError(f"missing keys {missing}")
+    idx = np.asarray(block["index"])
+    n = idx.size
+    n_points = len(points)
+    if idx.ndim != 1 or n == 0 or not np.issubdtype(idx.dtype, np.integer):
+        raise ValueError("bad index array")
+    if idx.min() < 0 or idx.max() >= n_points:
+        raise ValueError(f"indices {int(idx.min())}..{int(idx.max())} outside the grid's 0..{n_points - 1}")
+    if np.unique(idx).size != n:
+        raise ValueError("repeated indices")
+    for key in keys[1:]:
+        if key == "coords":
+            expected = (n, len(spec.dims))
+        elif key in spec.array_vars:
+            expected = (n, *spec.array_shape(key, options))
+        else:
+            expected = (n,)
+        if np.shape(block[key]) != expected:
+            raise ValueError(f"{key} has shape {np.shape(block[key])}, expected {expected}")
+    if not np.array_equal(np.asarray(block["coords"], dtype=float), points[idx]):
+        k = int(np.argmax(np.any(np.asarray(block["coords"], dtype=float) != points[idx], axis=1)))
+        raise ValueError(f"point {int(idx[k])} has coordinates {np.asarray(block['coords'])[k].tolist()}, "
+                         f"the grid's are {points[idx[k]].tolist()} (shifted or foreign indices)")
+    status = np.asarray(block["status"])
+    unknown = sorted(set(np.unique(status).tolist()) - set(spec.status_codes))
+    if unknown:
+        raise ValueError(f"unknown status codes {unknown} (known: {spec.all_codes})")
+    for name in spec.flag_vars:
+        v = np.asarray(block[name])
+        if not np.all(np.isin(v, (-1, 0, 1))):
+            raise ValueError(f"flag {name} holds values other than -1, 0, 1")
+    ok = status == 0
+    for name in spec.required:
+        v = np.asarray(block[name], dtype=float)[ok]
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"{name} is not finite at {int(np.sum(~np.isfinite(v.reshape(v.shape[0], -1)).any(axis=1)))} "
+                             f"point(s) with status ok")
 
 
 def validate_block(block: dict, n_points: int, samples: int) -> None:
-    """Raise ValueError if `block` is not a well-formed block for a grid of n_points."""
-    missing = [k for k in BLOCK_KEYS if k not in block]
+    """Raise ValueError if `block` is not a well-formed planar-unit block for a grid of n_points
+    (shapes, index range, no pending points)."""
+    spec = _unit()
+    keys = [k for k in spec.block_keys() if k != "coords"]
+    missing = [k for k in keys if k not in block]
     if missing:
         raise ValueError(f"missing keys {missing}")
     idx = np.asarray(block["index"])
     n = idx.size
     if idx.ndim != 1 or n == 0 or idx.min() < 0 or idx.max() >= n_points:
         raise ValueError(f"bad index array (grid has {n_points} points)")
-    for key in BLOCK_KEYS[1:]:
+    for key in keys[1:]:
         expected = (n, samples, 2) if key == "base_shape" else (n,)
         if np.shape(block[key]) != expected:
             raise ValueError(f"{key} has shape {np.shape(block[key])}, expected {expected}")
@@ -77,10 +144,7 @@ def resolve_solver(solve):
     if callable(solve):
         return solve
     if isinstance(solve, str) and ":" in solve:
-        module, _, attr = solve.partition(":")
-        fn = importlib.import_module(module)
-        for part in attr.split("."):
-            fn = getattr(fn, part)
+        fn = resolve(solve)  # ValueError naming the solver if it does not import
         if callable(fn):
             return fn
     raise ValueError(f"solver must be a callable or 'module:function', got {solve!r}")
@@ -93,19 +157,43 @@ def solver_name(solve) -> str:
     return f"{getattr(solve, '__module__', '?')}:{getattr(solve, '__qualname__', repr(solve))}"
 
 
-def solve_batch(indices, coords, b_over_L: float, resolution, samples: int, solve) -> dict:
-    """Solve the points `coords` ((n, 3) of h/L, t/L, w/L) with flat indices `indices`.
+def solve_points(indices, coords, spec, options: dict, solve, time_limit=None) -> dict:
+    """Solve the points `coords` ((n, ndim)) with flat indices `indices` with the point solver
+    `solve` of kind `spec`; runs on a worker.
 
-    Runs on a worker. Never raises because of one point: an exception of the solver is recorded
-    as status 2 with its message. `solve_time` is the wall time (s) of each point's solve.
+    Never raises because of one point: an exception of the solver is recorded as not_converged
+    with its message. `time_limit` (s per point, None = none) is passed to solvers that take it;
+    a point that returns after it keeps its result (the driver's watchdog handles one that does
+    not return). `solve_time` is the wall time (s) of each point's solve.
     """
     fn = resolve_solver(solve)
-    block = empty_block(indices, samples)
-    for k, (h, t, w) in enumerate(np.asarray(coords, dtype=float)):
+    coords = np.asarray(coords, dtype=float).reshape(len(indices), len(spec.dims))
+    block = new_block(spec, indices, options, coords)
+    failed = spec.code("not_converged")
+    for k, point in enumerate(coords):
         t0 = time.perf_counter()
         try:
-            rec = finalise_record(fn(float(h), float(t), float(w), b_over_L, resolution, samples), samples)
+            rec = spec.finalise_record(spec.call_solver(fn, point, options, time_limit), options)
         except Exception as exc:
-            rec = empty_record(samples, NOT_CONVERGED, f"solver raised {exc!r}")
+            rec = spec.empty_record(options, failed, f"solver raised {exc!r}")
         put(block, k, rec, time.perf_counter() - t0)
     return block
+
+
+def solve_batch(indices, coords, b_over_L: float, resolution, samples: int, solve,
+                time_limit=None) -> dict:
+    """Planar unit: solve the points `coords` ((n, 3) of h/L, t/L, w/L) with flat indices
+    `indices` (see `solve_points`)."""
+    options = {"b_over_L": b_over_L, "resolution": resolution, "samples": samples}
+    return solve_points(indices, coords, _unit(), options, solve, time_limit)
+
+
+def timeout_record(spec, options: dict, time_limit: float, what: str) -> dict:
+    """The record of a point stopped by the watchdog after `time_limit` s."""
+    return spec.empty_record(options, spec.code("timeout"),
+                             f"exceeded the wall-time limit of {time_limit:g} s per point ({what})")
+
+
+__all__ = ["new_block", "empty_block", "put", "merge", "check_block", "validate_block",
+           "resolve_solver", "solver_name", "solve_points", "solve_batch", "timeout_record",
+           "INT_VARS", "BLOCK_KEYS"]

@@ -1,4 +1,4 @@
-"""Assemble a block over all grid points into the schema-1 xarray Dataset and write it.
+"""Assemble a block over all grid points into the schema-2 xarray Dataset and write it.
 
 The assembler does no physics: it reshapes, labels (CF `units`, `long_name`, status flags) and
 writes compressed netCDF4 atomically.
@@ -16,10 +16,10 @@ import xarray as xr
 
 from pipeline.batch import INT_VARS
 from pipeline.grid import Grid
-from pipeline.point import E_REF, L_REF
+from pipeline.point import E_REF, L_REF, model_options
 from pipeline.schema import (
-    BASE_SHAPE_ATTRS, COORD_ATTRS, FLAG_VARS, FLOAT_VARS, GRID_DIMS, NORMALISATION,
-    SCHEMA_VERSION, SOLVE_TIME_ATTRS, STATUS_ATTRS,
+    COORD_ATTRS, FLAG_VARS, FLOAT_VARS, GRID_DIMS, NORMALISATION, SCHEMA_VERSION, SHAPE_ATTRS,
+    SHAPE_VARS, SOLVE_TIME_ATTRS, STATUS_ATTRS,
 )
 
 
@@ -66,6 +66,7 @@ def global_attrs(grid: Grid, prov: dict) -> dict:
         "normalisation": NORMALISATION,
         "E_reference": float(E_REF),
         "L_reference": float(L_REF),
+        **model_options(),
     }
 
 
@@ -94,8 +95,9 @@ def assemble(grid: Grid, total: dict, attrs: dict) -> xr.Dataset:
         data[name] = (GRID_DIMS, total[name][order].astype(np.int8).reshape(shape),
                       {"units": units, "long_name": long_name})
     data["status"] = (GRID_DIMS, total["status"][order].astype(np.int8).reshape(shape), dict(STATUS_ATTRS))
-    data["base_shape"] = ((*GRID_DIMS, "sample", "xz"),
-                          total["base_shape"][order].reshape(*shape, grid.samples, 2), dict(BASE_SHAPE_ATTRS))
+    for name in SHAPE_VARS:
+        data[name] = ((*GRID_DIMS, "sample", "xz"),
+                      total[name][order].reshape(*shape, grid.samples, 2), dict(SHAPE_ATTRS[name]))
     data["solve_time"] = (GRID_DIMS, total["solve_time"][order].reshape(shape), dict(SOLVE_TIME_ATTRS))
     return xr.Dataset(data, coords=coords, attrs=attrs)
 

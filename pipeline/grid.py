@@ -98,6 +98,21 @@ class Grid:
         object.__setattr__(self, "samples", int(s))
 
     @property
+    def dims(self) -> tuple[str, str, str]:
+        """The map's grid dimensions, in storage order."""
+        return ("h_over_L", "t_over_L", "w_over_L")
+
+    @property
+    def axes(self) -> dict:
+        """{dimension: values}, in storage order (the interface shared with `MapGrid`)."""
+        return {d: getattr(self, d) for d in self.dims}
+
+    @property
+    def options(self) -> dict:
+        """The model options passed to the point solver (resolution None = solver default)."""
+        return {"b_over_L": self.b_over_L, "resolution": self.resolution, "samples": self.samples}
+
+    @property
     def shape(self) -> tuple[int, int, int]:
         """(n_h, n_t, n_w)."""
         return (len(self.h_over_L), len(self.t_over_L), len(self.w_over_L))

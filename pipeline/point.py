@@ -14,14 +14,24 @@ import math
 import numpy as np
 
 from pipeline.schema import (
-    BISTABLE_ONLY, DEFAULT_SAMPLES, FLAG_VARS, FLOAT_VARS, INVALID_GEOMETRY, MONOSTABLE,
-    NOT_CONVERGED, OK, STATUS_CODES,
+    BISTABLE_ONLY, DEFAULT_SAMPLES, FAILED, FLAG_VARS, FLOAT_VARS, MONOSTABLE, NOT_BISTABLE,
+    INVALID_GEOMETRY, NOT_CONVERGED, OK, OPTIONAL_VARS, RELEASED_VARS, SHAPE_VARS, STATUS_CODES,
 )
 
 #: reference base length (m) and Young's modulus (Pa) used to build the SI geometry; the
 #: normalised outputs do not depend on them
 L_REF = 0.1
 E_REF = 2.2e9
+#: the actuator joint of the maps, over L: the paper's 1/8 in stem at its L = 100 mm
+JOINT_LENGTH_OVER_L = 0.03175
+#: the maps bond the whole flat part b + w of each end (`UnitGeometry.bond_length` = None)
+BOND_LENGTH = "b+w"
+
+
+def model_options() -> dict:
+    """The unit-model options a map is built with (recorded as global attributes, and part of
+    a build's fingerprint)."""
+    return {"joint_length_over_L": JOINT_LENGTH_OVER_L, "bond_length_over_L": BOND_LENGTH}
 
 
 def empty_record(samples: int = DEFAULT_SAMPLES, status: int = NOT_CONVERGED, message: str = "") -> dict:
@@ -29,7 +39,8 @@ def empty_record(samples: int = DEFAULT_SAMPLES, status: int = NOT_CONVERGED, me
     rec = {name: math.nan for name in FLOAT_VARS}
     rec.update({"bistable": 0, "self_standing": -1, "bifurcation": -1})
     rec["status"] = status
-    rec["base_shape"] = np.full((samples, 2), np.nan)
+    for name in SHAPE_VARS:
+        rec[name] = np.full((samples, 2), np.nan)
     rec["message"] = message
     return rec
 
@@ -74,12 +85,12 @@ def normalise_result(r, samples: int = DEFAULT_SAMPLES) -> dict:
     if status not in STATUS_CODES or status < 0:
         return empty_record(samples, NOT_CONVERGED, f"solver returned unknown status_code {status}")
     rec = empty_record(samples, status, str(getattr(r, "status", "")))
-    if status in (NOT_CONVERGED, INVALID_GEOMETRY):
+    if status in FAILED:
         return rec
     rec["F_cr"] = float(r.F_cr) * f_scale
     rec["d_cr"] = float(r.d_cr) / L
     rec["bifurcation"] = _flag(r.bifurcation)
-    if status == MONOSTABLE:
+    if status in NOT_BISTABLE:
         return rec
     rec["bistable"] = 1 if r.bistable else 0
     rec["self_standing"] = _flag(r.self_standing)
@@ -87,18 +98,28 @@ def normalise_result(r, samples: int = DEFAULT_SAMPLES) -> dict:
     rec["d_second"] = float(r.d_second) / L
     rec["S"] = float(r.S) / L
     rec["theta"] = float(r.theta_deg)
+    rec["theta_end"] = float(getattr(r, "theta_end_deg", math.nan))
     rec["energy_barrier"] = float(r.energy_barrier) * u_scale
     rec["energy_stored"] = float(r.energy_stored) * u_scale
     rec["base_shape"] = resample_shape(np.asarray(r.base_shape, dtype=float) / L, samples)
+    rel = getattr(r, "released", None) or {}
+    if rec["self_standing"] == 1 and "base_shape" in rel:
+        rec["S_released"] = float(rel["S"]) / L
+        rec["theta_released"] = float(rel["theta_deg"])
+        rec["theta_end_released"] = float(rel.get("theta_end_deg", math.nan))
+        rec["base_shape_released"] = resample_shape(np.asarray(rel["base_shape"], float) / L, samples)
     return rec
 
 
 def solve_point(h_over_L, t_over_L, w_over_L, b_over_L=0.0, resolution=None,
-                samples: int = DEFAULT_SAMPLES) -> dict:
-    """Simulate one unit (L = 0.1 m, E = 2.2 GPa) and return its dimensionless schema record.
+                samples: int = DEFAULT_SAMPLES, time_limit=None) -> dict:
+    """Simulate one unit (L = 0.1 m, E = 2.2 GPa, the maps' joint and bond) and return its
+    dimensionless schema record.
 
-    Never raises: a geometry ValueError gives status 3 (invalid_geometry), any other exception
-    or a failed solve gives status 2 (not_converged) with NaN fields; `message` says why.
+    ``time_limit``: wall time (s) for the point (None: none); past it the point gets status 4
+    (timeout). Never raises: a geometry ValueError gives status 3 (invalid_geometry), any other
+    exception or a failed solve gives status 2 (not_converged) with NaN fields; `message` says
+    why.
     """
     try:
         from solver.unit import UnitGeometry, simulate_unit
@@ -106,13 +127,17 @@ def solve_point(h_over_L, t_over_L, w_over_L, b_over_L=0.0, resolution=None,
         return empty_record(samples, NOT_CONVERGED, f"cannot import solver.unit: {exc!r}")
     L = L_REF
     try:
-        g = UnitGeometry(L=L, h=h_over_L * L, t=t_over_L * L, w=w_over_L * L, b=b_over_L * L, E=E_REF)
+        g = UnitGeometry(L=L, h=h_over_L * L, t=t_over_L * L, w=w_over_L * L, b=b_over_L * L,
+                         E=E_REF, joint_length=JOINT_LENGTH_OVER_L * L)
     except ValueError as exc:
         return empty_record(samples, INVALID_GEOMETRY, f"invalid geometry: {exc}")
     except Exception as exc:
         return empty_record(samples, NOT_CONVERGED, f"geometry failed: {exc!r}")
     try:
-        r = simulate_unit(g, nodes=resolution)
+        if time_limit is None:
+            r = simulate_unit(g, nodes=resolution)
+        else:
+            r = simulate_unit(g, nodes=resolution, time_limit=time_limit)
         return finalise_record(normalise_result(r, samples), samples)
     except Exception as exc:
         return empty_record(samples, NOT_CONVERGED, f"solver raised {exc!r}")
@@ -152,8 +177,10 @@ def warm_up(resolution=None) -> float:
 def finalise_record(rec, samples: int = DEFAULT_SAMPLES) -> dict:
     """Check and clean any solver's record so it obeys the schema.
 
-    Missing keys or wrong types turn the point into status 2; fields that do not exist for the
-    point's status are set to NaN; an "ok" record with non-finite fields becomes status 2.
+    Missing keys or wrong types turn the point into status 2 (the schema-2 additions,
+    `OPTIONAL_VARS` and base_shape_released, may be left out: they are then NaN); fields that
+    do not exist for the point's status are set to NaN; an "ok" record with non-finite fields
+    becomes status 2; released-state fields exist exactly where self_standing = 1.
     """
     if not isinstance(rec, dict):
         return empty_record(samples, NOT_CONVERGED, f"solver returned {type(rec).__name__}, not dict")
@@ -162,32 +189,47 @@ def finalise_record(rec, samples: int = DEFAULT_SAMPLES) -> dict:
         if status not in STATUS_CODES or status < 0:
             raise ValueError(f"unknown status {status}")
         out = empty_record(samples, status, str(rec.get("message", "")))
-        if status in (NOT_CONVERGED, INVALID_GEOMETRY):
+        if status in FAILED:
             return out
         for name in FLOAT_VARS:
+            if name in OPTIONAL_VARS and name not in rec:
+                continue
             out[name] = float(rec[name])
         for name in FLAG_VARS:
             v = int(rec[name])
             if v not in (-1, 0, 1):
                 raise ValueError(f"flag {name} = {v} is not -1, 0 or 1")
             out[name] = v
-        shape = np.asarray(rec["base_shape"], dtype=float)
-        if shape.shape != (samples, 2):
-            raise ValueError(f"base_shape has shape {shape.shape}, expected ({samples}, 2)")
-        out["base_shape"] = shape.copy()
+        for name in SHAPE_VARS:
+            if name == "base_shape_released" and name not in rec:
+                continue
+            shape = np.asarray(rec[name], dtype=float)
+            if shape.shape != (samples, 2):
+                raise ValueError(f"{name} has shape {shape.shape}, expected ({samples}, 2)")
+            out[name] = shape.copy()
     except Exception as exc:
         return empty_record(samples, NOT_CONVERGED, f"malformed solver record: {exc!r}")
-    if status == MONOSTABLE:
-        for name in BISTABLE_ONLY:
+    if status in NOT_BISTABLE:
+        for name in (*BISTABLE_ONLY, *RELEASED_VARS):
             out[name] = math.nan
-        out["base_shape"][:] = np.nan
+        for name in SHAPE_VARS:
+            out[name][:] = np.nan
         out["bistable"] = 0
         out["self_standing"] = -1
         return out
-    # status OK: everything must be present
-    missing = [n for n in FLOAT_VARS if not math.isfinite(out[n])]
+    # status OK: everything must be present; the released state exactly where self-standing
+    if out["self_standing"] != 1:
+        for name in RELEASED_VARS:
+            out[name] = math.nan
+        out["base_shape_released"][:] = np.nan
+    required = [n for n in FLOAT_VARS if n not in OPTIONAL_VARS]
+    if out["self_standing"] == 1 and any(n in rec for n in RELEASED_VARS):
+        required += [n for n in RELEASED_VARS]
+    missing = [n for n in required if not math.isfinite(out[n])]
     if not np.all(np.isfinite(out["base_shape"])):
         missing.append("base_shape")
+    if "S_released" in required and not np.all(np.isfinite(out["base_shape_released"])):
+        missing.append("base_shape_released")
     if out["bistable"] != 1:
         missing.append("bistable")
     if missing:

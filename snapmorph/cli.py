@@ -12,15 +12,23 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("unit", "maps", "design", "fk", "array", "figures")
+COMMANDS = ("unit", "maps", "design", "fk", "array", "figures", "unit3d", "unit2d")
 
 
 class CommandError(Exception):
     """A user-facing error: printed as one line, exit status 2."""
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with usage errors in one line (no usage dump): the option, its unit and range
+    come from the `snapmorph.commands._common` types; ``--help`` shows the usage."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="snapmorph",
         description="Bistable arch-on-base units: simulate one unit, build design maps, "
         "design arrays that morph into target shapes.",
@@ -39,8 +47,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    """Run one command; return its exit status (2 for any expected failure, printed as one
+    line on stderr; ``--help`` and usage errors return instead of raising SystemExit)."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
     if not getattr(args, "command", None):
         parser.print_help()
         return 0
@@ -52,6 +65,12 @@ def main(argv=None) -> int:
     except ValueError as exc:
         # Validation errors from the library name the parameter and its range.
         print(f"snapmorph {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        # Files the command could not read or write (the paths are checked up front by
+        # `commands._common`; this catches what slips through, e.g. a disk that fills up).
+        where = f": {exc.filename}" if getattr(exc, "filename", None) else ""
+        print(f"snapmorph {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

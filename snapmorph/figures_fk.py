@@ -1,12 +1,25 @@
-"""Figures: forward kinematics of the paper's three units, and the inverse designs (M, S)."""
+"""Figures: forward kinematics of the paper's three units (8 states), and the inverse designs
+(M, S) with their units.csv (with the placement line) and drawings."""
+
+from pathlib import Path
 
 
 def make(out, args=None):
-    from design.paper import write_figures
+    from design.drawings import write_drawings
+    from design.lookup import load_map
+    from design.paper import design_M, design_S, three_units
+    from design.plots import plot_design
+    from design.units import write_units_csv
+    from snapmorph.plotting.arrays import plot_fk_states
 
-    dm = None
-    if args is not None and getattr(args, "map", None):
-        from maps import DesignMap
-
-        dm = DesignMap.load(args.map)
-    return [str(p) for p in write_figures(out, design_map=dm)]
+    dm = load_map(getattr(args, "map", None) if args is not None else None)
+    out = Path(out)
+    states = {k: c.xy for k, c in three_units(dm).items()}
+    paths = [plot_fk_states(states, out / "fk_states.png",
+                            title="three units (L 100, h 20, t 0.5, w 5 mm; map, b = 0)")]
+    for name, d in (("M", design_M(dm, "paper")), ("S", design_S(dm))):
+        paths.append(plot_design(d, out / f"inverse_{name}.png"))
+        paths.append(write_units_csv(d.units, out / f"inverse_{name}" / "units.csv",
+                                     placement=getattr(d, "placement", None)))
+        paths += write_drawings(d.units, out / f"inverse_{name}", bed_length_mm=600.0)
+    return [str(p) for p in paths]

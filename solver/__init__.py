@@ -7,5 +7,6 @@ constrained system (`system`), the model builder (`structure`) and the path foll
 
 from solver.continuation import ConvergenceError, Path
 from solver.structure import Rod, Structure
+from solver.structure3d import Rod3D, Structure3D
 
-__all__ = ["Structure", "Rod", "Path", "ConvergenceError"]
+__all__ = ["Structure", "Rod", "Path", "ConvergenceError", "Structure3D", "Rod3D"]

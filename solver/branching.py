@@ -36,9 +36,10 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 
 from solver.banded import ldlt_factor, ldlt_solve
-from solver.stability import CriticalPoint, critical_modes, expand_mode, held_count
+from solver.stability import CriticalPoint, critical_modes, expand_full, expand_mode, held_count
 
 BRANCHES = ("follow", "primary")
 
@@ -47,7 +48,9 @@ BRANCHES = ("follow", "primary")
 class PathState:
     """One converged state of a path, as the monitor sees it.
 
-    q: (2 n_nodes,) flat positions, m; lam: force on the pushed node along its direction, N;
+    q: the full state vector (positions, m, and whatever else the structure's state holds);
+    lam: load factor, the force on the pushed node along its direction in units of the
+    monitor's ``load_unit`` (N);
     d: its displacement along the direction, m; neg_force/neg_disp: negative eigenvalues
     under force / displacement control (-1: unknown); dir_force/dir_disp: +1 or -1 when F / d
     grows along the direction of travel at this state, 0 when unknown.
@@ -66,7 +69,8 @@ class PathState:
 @dataclass
 class Reroute:
     """The path leaves its branch: the bifurcation point and the first state beyond it, both
-    path rows; ``step`` is the reduced increment between them (orients the next step);
+    path rows; ``step``: a reduced vector along the new branch's direction of travel at
+    its first state (orients the driver's next predictor);
     ``rate``: dq/dd (flat, 1) along the new branch at its first state, the predictor of a
     displacement-controlled step (None where d turns)."""
 
@@ -74,6 +78,7 @@ class Reroute:
     state: PathState
     step: np.ndarray
     rate: np.ndarray | None = None
+    distance: float = 0.0  # scaled distance (u, omega lam) from the point to the state, m
 
 
 class BranchMonitor:
@@ -83,11 +88,13 @@ class BranchMonitor:
     ``fscale`` (N) and ``length`` (m): the structure's scales for the Newton tolerances;
     ``system``: the force-control `ReducedSystem` to share (MGDC), else one is built when
     first needed; ``nominal_step`` (m): the driver's first-step size, displacement norm;
-    ``switch_size``: the perturbation as a fraction of it.
+    ``switch_size``: the perturbation as a fraction of it; ``load_unit`` (N): the force of
+    a unit load factor (states carry lam = F / load_unit; critical points record F in N).
     """
 
     def __init__(self, structure, control, branch, tol, fscale, length, nominal_step,
-                 system=None, switch_size=0.5, max_switches=8, max_iter=25):
+                 system=None, switch_size=0.5, max_switches=8, max_iter=25, load_unit=1.0,
+                 rig_step=None):
         if branch not in BRANCHES:
             raise ValueError(f"branch must be one of {BRANCHES}; got {branch!r}")
         self.structure = structure
@@ -100,6 +107,9 @@ class BranchMonitor:
         self.nominal_step = float(nominal_step)
         self.max_switches = int(max_switches)
         self.max_iter = int(max_iter)
+        self.load_unit = float(load_unit)
+        self.rig_step = None if rig_step is None else float(rig_step)
+        self._held = None
         self._system = system
         self._P = None
         self.points: list[CriticalPoint] = []
@@ -119,7 +129,7 @@ class BranchMonitor:
         if self._P is None:
             from solver.continuation import _load_vector
 
-            self._P = _load_vector(self.system, self.control)
+            self._P = _load_vector(self.system, self.control) * self.load_unit
         return self._P
 
     def start(self, state: PathState):
@@ -170,7 +180,8 @@ class BranchMonitor:
             if x.min() <= xr <= x.max():
                 xv, yv = xr, c - b * b / (4 * a)
         d_v, F_v = (xv, yv) if control == "force" else (yv, xv)
-        self.points.append(CriticalPoint("limit", control, index, float(d_v), float(F_v)))
+        self.points.append(CriticalPoint("limit", control, index, float(d_v),
+                                         float(F_v) * self.load_unit))
 
     # ------------------------------------------------------------------ bifurcations
     def _bifurcation(self, a, b, m, index):
@@ -191,9 +202,10 @@ class BranchMonitor:
         else:
             c, phi, mu, m = located
         c.neg_force, c.neg_disp = a.neg_force, a.neg_disp
-        point = CriticalPoint("bifurcation", "both", index, c.d, c.lam,
-                              positions=c.q.reshape(-1, 2).copy(),
-                              mode=expand_mode(self.system, phi), eigenvalue=mu,
+        st = self.structure
+        point = CriticalPoint("bifurcation", "both", index, c.d, c.lam * self.load_unit,
+                              positions=np.array(st.positions_of(c.q), copy=True),
+                              mode=expand_mode(self.system, phi, st), eigenvalue=mu,
                               multiplicity=m, located=located is not None)
         self.points.append(point)
         return self._maybe_switch(point, a, b, c, phi)
@@ -203,7 +215,10 @@ class BranchMonitor:
         following branches; otherwise leave the system at ``b``."""
         reroute = None
         if self.branch == "follow" and self.switches < self.max_switches:
-            reroute = self._switch(a, c, phi, self.switch_size * self.nominal_step)
+            if self.rig_step is not None and self.control_axis is not None:
+                reroute = self._rig_switch(a, c)
+            if reroute is None:
+                reroute = self._switch(a, c, phi, self.switch_size * self.nominal_step)
         if reroute is None:
             self._restore(b.q)
             return None
@@ -254,7 +269,7 @@ class BranchMonitor:
         Returns (lam, negative count under force control) or None; the factor of K at the
         converged q is left in the system's band (for `_solve`)."""
         sysm, P = self.system, self.P
-        fmax = max(self.fscale, abs(lam))
+        fmax = max(self.fscale, abs(lam) * self.load_unit)
         tol_disp = 1e-11 * self.length
         du_max = np.inf
         for it in range(self.max_iter + 1):
@@ -345,6 +360,123 @@ class BranchMonitor:
         return state, v[:, 0], float(w[0]), m
 
     # ------------------------------------------------------------------ switching
+    @property
+    def control_axis(self):
+        """The state component the push moves (an axis-aligned push), else None."""
+        n = self.control.direction
+        axes = [k for k in range(len(n)) if abs(abs(n[k]) - 1.0) < 1e-12]
+        return axes[0] if axes else None
+
+    @property
+    def held_system(self):
+        """The system with the pushed displacement held (built when first needed)."""
+        if self._held is None:
+            self._held = self.structure.reduced_system(
+                extra_fixed=[(self.control.node, self.control_axis)])
+        return self._held
+
+    def _rig_switch(self, a, c):
+        """What a displacement-controlled rig does at the bifurcation point c (reached from
+        the state a): the pushed node is moved on to d_c + rig_step and the structure settles
+        into a stable equilibrium there. Newton from the point (shifted along the arriving
+        chord) finds the nearest equilibrium; while it is unstable with the displacement
+        held, the state leaves it along all of its unstable modes together and descends the
+        energy (`_settle`). Every branch through the point is covered whatever the
+        multiplicity (a symmetric structure may have several modes crossing at once), and
+        the new state lies ahead in d. Returns a `Reroute` or None (then `_switch`)."""
+        ctl, axis = self.control, self.control_axis
+        sysd = self.held_system
+        delta = self.rig_step
+        q0 = self.structure.initial_state()
+        held = ctl.member_dofs[:, axis]
+        q = c.q.copy()
+        if c.d - a.d > 1e-3 * delta:  # predictor along the arriving chord
+            q += (c.q - a.q) * (delta / (c.d - a.d))
+        q[held] = q0[held] + ctl.direction[axis] * (c.d + delta)
+        if not self._settle(sysd, q):
+            return None
+        F = ctl.force(sysd)
+        sysm, P = self.system, self.P
+        self._restore(q)
+        if not sysm.factor_ok:
+            return None
+        uP = sysm.solve(P)
+        flex = float(P @ uP)
+        negative = sysm.negative_eigenvalues
+        orient = 1.0 if flex >= 0.0 else -1.0  # onwards in d
+        state = PathState(q, F / self.load_unit, _node_displacement(self, q), negative,
+                          held_count(negative, flex), orient, 1.0, sysm.energy)
+        rate = None
+        if abs(flex) > 0.0 and np.isfinite(flex):  # du/dd = u_P / (P^T u_P) on the branch
+            rate = expand_full(sysm, uP / flex)
+        distance = float(np.linalg.norm(sysm.reduced(q) - sysm.reduced(c.q)))
+        return Reroute(c, state, orient * uP, rate, distance)
+
+    def _settle(self, sysd, q, max_iter=200):
+        """Move q (pushed displacement held) to a stable equilibrium: Newton steps on
+        K + mu I (mu makes it positive definite, so every step goes down the energy) plus
+        a push along the unstable modes, with a backtracking line search on the energy;
+        plain Newton once K is positive definite. Returns True on success (q updated, the
+        system factorised there)."""
+        tol_force = self.tol * self.fscale
+        tol_disp = 1e-11 * self.length
+        du_max = np.inf
+        kicks = 0
+        for _ in range(max_iter):
+            energy = sysd.evaluate(q)
+            g = sysd.grad[: sysd.n].copy()
+            if not np.all(np.isfinite(g)):
+                return False
+            band = sysd.band.copy()
+            status, negative, _ = ldlt_factor(sysd.band, 0.0)
+            if status != 0:
+                sysd.band[:, :] = band
+                negative = -1
+            r_max = float(np.max(np.abs(g))) if g.size else 0.0
+            if negative == 0:
+                sysd.factor_ok = True
+                sysd.negative_eigenvalues = 0
+                sysd._dense_lu = None
+                if r_max <= tol_force or du_max <= tol_disp:
+                    return True
+                du = sysd.solve(-g)
+            else:
+                w, v = scipy.linalg.eig_banded(band, lower=True, select="i",
+                                               select_range=(0, max(negative, 1) - 1),
+                                               check_finite=False)
+                shifted = band.copy()
+                mu = 2.0 * max(-float(w[0]), 0.0) + 1e-6 * float(np.max(np.abs(band[0])))
+                shifted[0] += mu
+                if ldlt_factor(shifted, 0.0)[0] != 0:
+                    return False
+                du = ldlt_solve(shifted, np.ascontiguousarray(-g.reshape(-1, 1))).ravel()
+                # leave the saddle along every unstable mode (a sum: all of them grow),
+                # each oriented with its largest component positive (deterministic)
+                kick = np.zeros_like(du)
+                for j in range(v.shape[1]):
+                    col = v[:, j] if w[j] < 0 else 0.0 * v[:, j]
+                    if np.any(col):
+                        col = col if col[np.argmax(np.abs(col))] > 0 else -col
+                        kick += col
+                if np.any(kick) and kicks < 20:
+                    kicks += 1
+                    size = self.rig_step * max(1.0, float(np.linalg.norm(du)) / self.rig_step)
+                    du = du + size * kick / np.linalg.norm(kick)
+            if not np.all(np.isfinite(du)):
+                return False
+            # backtracking on the energy (Newton steps on a positive definite K may be
+            # taken whole once the energy drops)
+            t = 1.0
+            q_base = q.copy()
+            while True:
+                sysd.increment(q, du, t)
+                if negative == 0 or sysd.evaluate(q) < energy or t < 1e-6:
+                    break
+                q[:] = q_base
+                t *= 0.5
+            du_max = float(np.max(np.abs(du))) * t
+        return False
+
     def _switch(self, a, c, phi, eps):
         """Leave the point ``c`` along the branch that does not contain the state ``a``
         (the direction of arrival, up to its sense); see the module doc."""
@@ -363,11 +495,11 @@ class BranchMonitor:
         for direction in (t, -t):
             state = self._beyond(c, direction, omega, eps)
             if state is not None:
-                found.append((state[0], float(direction @ e1), state[1], state[2]))
+                found.append((state[0], float(direction @ e1), state[1], state[2], direction))
         if not found:
             return None
-        _, _, q, lam = _forward(found, c.d, self.length)
-        return self._rerouted(c, q, lam)
+        _, _, q, lam, direction = _forward(found, c.d, self.length)
+        return self._rerouted(c, q, lam, direction, omega)
 
     def _tangent_plane(self, c, phi):
         """Orthonormal (e1, e2) spanning the equilibrium tangents at the bifurcation point
@@ -404,14 +536,18 @@ class BranchMonitor:
             eps *= 0.5
         return None
 
-    def _rerouted(self, c, q, lam):
+    def _rerouted(self, c, q, lam, direction, omega):
         """The `Reroute` from the point c to the state (q, lam) on the new branch, with the
-        shared system left factorised at q."""
+        shared system left factorised at q. ``direction`` (scaled (u, omega lam), see
+        `_switch`) is the branch's direction of departure: the path's direction of travel
+        at q is the tangent ±(u_P, 1) that goes on that way. (The chord from c to q is no
+        guide: c is located only to a tolerance, off the new branch along the mode, and near
+        a pitchfork the chord's component along u_P is round-off.)"""
         sysm, P = self.system, self.P
         self._restore(q)
         uP = sysm.solve(P)
-        step = sysm.reduced(q) - sysm.reduced(c.q)
-        orient = 1.0 if float(uP @ step) >= 0.0 else -1.0
+        orient = 1.0 if float(uP @ direction[:-1]) + omega * float(direction[-1]) >= 0.0 else -1.0
+        step = orient * uP  # orients the driver's next predictor
         flex = float(P @ uP)
         negative = sysm.negative_eigenvalues
         state = PathState(q, lam, _node_displacement(self, q), negative,
@@ -419,8 +555,9 @@ class BranchMonitor:
                           orient * (1.0 if flex >= 0.0 else -1.0), sysm.energy)
         rate = None
         if abs(flex) > 0.0 and np.isfinite(flex):  # du/dd = u_P / (P^T u_P) on the branch
-            rate = expand_mode(sysm, uP / flex).reshape(-1)
-        return Reroute(c, state, step, rate)
+            rate = expand_full(sysm, uP / flex)
+        dz = np.append(sysm.reduced(q) - sysm.reduced(c.q), omega * (lam - c.lam))
+        return Reroute(c, state, step, rate, float(np.linalg.norm(dz)))
 
 
 def _illinois(lo, hi, evaluate, f_of, root, tol_tau, tol_f, max_eval):
@@ -477,7 +614,7 @@ def _classify(prev, neg_disp, dir_disp):
 
 
 def _forward(candidates, d_c, length):
-    """Of the candidate states (d, phi-component, q, lam), the one that advances the push
+    """Of the candidate states (d, phi-component, q, lam, direction), the one that advances the push
     most; when they advance alike (mirror images), the one along +phi."""
     span = max(abs(f[0] - d_c) for f in candidates)
     tie = 1e-3 * span + 1e-12 * length
@@ -487,7 +624,5 @@ def _forward(candidates, d_c, length):
 
 
 def _node_displacement(monitor, q):
-    """Displacement (m) of the pushed node along the push direction at flat positions q."""
-    X = monitor.structure.reference_positions
-    ctl = monitor.control
-    return float(ctl.direction @ (q.reshape(-1, 2)[ctl.node] - X[ctl.node]))
+    """Displacement (m) of the pushed node along the push direction at the state q."""
+    return monitor.control.displacement(q)

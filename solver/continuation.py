@@ -32,6 +32,10 @@ TOL_DISP = 1e-11
 # small the step, a fold of the path that a long step jumped over does not.
 CROSSING_REFINE = 1.0 / 256.0
 
+# A push may not ask for more than this times the structure's size (its largest extent): a
+# node of a held structure cannot move that far without stretching its rods several-fold.
+MAX_DISTANCE = 10.0
+
 
 class ConvergenceError(RuntimeError):
     """Newton iterations did not converge to an equilibrium."""
@@ -39,7 +43,11 @@ class ConvergenceError(RuntimeError):
 
 @dataclass
 class Control:
-    """What is pushed: ``node`` (with every node sharing its displacement) along ``direction``."""
+    """What is pushed: ``node`` (with every node sharing its displacement) along ``direction``.
+
+    ``dofs`` (dim,): the node's position components in the state vector; ``member_dofs``
+    (members, dim): those of every node sharing its displacement; ``origin`` (dim,) m: the
+    node's stress-free position."""
 
     node: int
     members: np.ndarray
@@ -47,20 +55,33 @@ class Control:
     distance: float
     method: str
     axis: int | None
+    dofs: np.ndarray = None
+    member_dofs: np.ndarray = None
+    origin: np.ndarray = None
 
+    def displacement(self, q) -> float:
+        """The pushed node's displacement (m) along the direction at the state ``q``."""
+        return float(self.direction @ (q[self.dofs] - self.origin))
 
-@dataclass
+    def force(self, system) -> float:
+        """The external force (N) along the direction that holds the pushed node (and the
+        nodes sharing its displacement) at the state last evaluated by ``system``."""
+        return float(self.direction @ system.grad_full[self.member_dofs].sum(axis=0))
+
+@dataclass(repr=False)
 class Path:
     """An equilibrium path of a push. Arrays have one entry per converged step.
 
     displacement: (K,) m, of the node along the direction, from 0;
     force: (K,) N, applied to the node along the direction;
-    positions: (K, n_nodes, 2) m; status: "ok" or why the path stopped early;
+    positions: (K, n_nodes, dim) m; status: "ok" or why the path stopped early
+    ("not converged: ...", "stopped: ...", "timeout: ...");
     negative_eigenvalues: (K,) of the tangent stiffness under the path's own control
     (force control for "mgdc", the node's displacement held for "displacement");
     negative_eigenvalues_displacement: (K,) the same with the pushed displacement held;
     critical_points: `solver.stability.CriticalPoint` records (limit points and
-    bifurcations met, in path order; empty when the push ran with ``critical=False``).
+    bifurcations met, in path order; empty when the push ran with ``critical=False``);
+    fields: the structure's other per-state arrays, name -> (K, ...) (3-D rods: "twist").
     """
 
     displacement: np.ndarray
@@ -74,6 +95,14 @@ class Path:
     negative_eigenvalues_displacement: np.ndarray
     info: dict = field(default_factory=dict)
     critical_points: list = field(default_factory=list)
+    fields: dict = field(default_factory=dict)
+
+    @property
+    def twist(self) -> np.ndarray:
+        """(K, n_edges) rad: the edges' twist angles (3-D rods only)."""
+        if "twist" not in self.fields:
+            raise AttributeError("this path has no twist (a planar structure)")
+        return self.fields["twist"]
 
     @property
     def stable(self) -> np.ndarray:
@@ -98,87 +127,186 @@ class Path:
     def __len__(self):
         return len(self.displacement)
 
+    def __repr__(self):
+        n = len(self)
+        if n == 0:
+            return f"Path(method={self.method!r}, 0 states, status={self.status!r})"
+        kinds = {}
+        for c in self.critical_points:
+            kinds[c.kind] = kinds.get(c.kind, 0) + 1
+        crit = ", ".join(f"{v} {k}" for k, v in kinds.items()) or "none"
+        return (
+            f"Path(method={self.method!r}, {n} states, status={self.status!r},\n"
+            f"     d = {self.displacement[0]:.6g} .. {self.displacement[-1]:.6g} m, "
+            f"F = {np.min(self.force):.6g} .. {np.max(self.force):.6g} N,\n"
+            f"     critical points: {crit}, nodes x dim: "
+            f"{self.positions.shape[1]} x {self.positions.shape[2]})"
+        )
+
 
 # ---------------------------------------------------------------------- set-up
 def make_control(structure, node, direction, distance, method) -> Control:
     """Validate a push request and describe it."""
     node = structure._check_node(node)
+    dim, names = int(structure.dim), structure.component_names
     if method not in ("mgdc", "displacement"):
         raise ValueError(f"method must be 'mgdc' or 'displacement'; got {method!r}")
-    n = np.asarray(direction, dtype=float).reshape(-1)
-    if n.shape != (2,) or not np.all(np.isfinite(n)) or np.hypot(*n) == 0.0:
-        raise ValueError(f"direction must be a finite non-zero (x, z) pair; got {direction!r}")
-    n = n / np.hypot(*n)
+    n = _real_array(direction, "direction").reshape(-1)
+    if n.shape != (dim,) or not np.all(np.isfinite(n)) or not np.any(n != 0.0):
+        raise ValueError(f"direction must be a finite non-zero ({', '.join(names)}) vector "
+                         f"(any length; it is normalised); got {direction!r}")
+    n = n / np.max(np.abs(n))  # no overflow for huge components
+    n = n / np.linalg.norm(n)
     if distance is None:
         raise ValueError("distance (m) is required")
-    distance = float(distance)
-    if not np.isfinite(distance) or distance <= 0.0:
-        raise ValueError(f"distance must be finite and > 0 m; got {distance!r}")
+    distance = _real_scalar(distance, "distance", "m")
+    length = structure.scales()[0]
+    if not np.isfinite(distance) or distance <= 0.0 or distance > MAX_DISTANCE * length:
+        raise ValueError(
+            f"distance must be finite, > 0 m and at most {MAX_DISTANCE:g} x the structure's "
+            f"size ({MAX_DISTANCE * length:.6g} m); got {distance!r}")
     rep = structure.supernodes()
     members = np.flatnonzero(rep == rep[node])
     fixed = structure.fixed_components(rep)[node]
-    for c, name in enumerate("xz"):
+    for c, name in enumerate(names):
         if fixed[c] and abs(n[c]) > 1e-12:
             raise ValueError(
                 f"node {node} is fixed in {name}: it cannot be pushed along "
-                f"({n[0]:g}, {n[1]:g}); "
+                f"({', '.join(f'{v:g}' for v in n)}); "
                 "push along a free direction or remove the support"
             )
     if fixed.all():
-        raise ValueError(f"node {node} is fixed in x and z: nothing to push")
+        raise ValueError(f"node {node} is fixed in {names}: nothing to push")
     axis = None
     if method == "displacement":
-        axis_aligned = [c for c in range(2) if abs(abs(n[c]) - 1.0) < 1e-12]
+        axis_aligned = [c for c in range(dim) if abs(abs(n[c]) - 1.0) < 1e-12]
         if not axis_aligned:
+            example = tuple(-1.0 if c == dim - 1 else 0.0 for c in range(dim))
             raise ValueError(
-                "method='displacement' needs an axis-aligned direction such as (0, -1); "
+                f"method='displacement' needs an axis-aligned direction such as {example}; "
                 "use method='mgdc' for an oblique push"
             )
         axis = axis_aligned[0]
         n = np.round(n)
-    return Control(node, members, n, distance, method, axis)
+    dofs = np.asarray(structure.node_dofs(node), dtype=np.int64)
+    member_dofs = np.array([structure.node_dofs(m) for m in members], dtype=np.int64)
+    origin = structure.initial_state()[dofs]
+    return Control(node, members, n, distance, method, axis, dofs, member_dofs, origin)
+
+
+def _real_array(value, name):
+    """``value`` as a float array, or a ValueError naming the parameter."""
+    if isinstance(value, (str, bytes)) or value is None:
+        raise ValueError(f"{name} must be numbers; got {value!r}")
+    try:
+        arr = np.asarray(value)
+    except Exception as exc:  # ragged sequences and the like
+        raise ValueError(f"{name} must be an array of real numbers; got {value!r}") from exc
+    if arr.dtype.kind not in "biuf":
+        raise ValueError(f"{name} must be real numbers; got {value!r}")
+    return arr.astype(float)
+
+
+def _real_scalar(value, name, unit):
+    """``value`` as a float, or a ValueError naming the parameter and its unit."""
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be a real number in {unit}; got {value!r}")
+    arr = _real_array(value, f"{name} ({unit})")
+    if arr.shape != ():
+        raise ValueError(f"{name} must be a single real number in {unit}; got shape {arr.shape}")
+    return float(arr)
 
 
 def _scales(structure):
-    X = structure.reference_positions
-    length = float(max(np.ptp(X[:, 0]), np.ptp(X[:, 1]), 1e-12))
-    EI = max(float(np.max(r.EI)) for r in structure.rods)  # N m^2
-    force = EI / length**2
-    return length, force
+    """(length m, force N) of the structure: see ``Structure.scales``."""
+    return structure.scales()
 
 
 def _load_vector(system, control):
+    """Reduced load vector of a unit force (N) on the pushed node along the direction."""
     P = np.zeros(system.n)
-    for c in range(2):
-        r = system.dof_map[2 * control.node + c]
+    for c, dof in enumerate(control.dofs):
+        r = system.dof_map[dof]
         if r >= 0:
             P[r] = control.direction[c]
     return P
 
 
+def _load_unit(fscale):
+    """The power of two nearest the force scale (N): the drivers solve for the load factor
+    lam = F / this, so that the tangent K^-1 P is of the structure's size whatever E is
+    (no overflow or underflow for E = 1e200 or 1e-200), and scaling by a power of two is
+    exact: the path does not depend on it."""
+    return float(2.0 ** np.round(np.log2(fscale)))
+
+
 def _node_force(system, control):
-    g = system.grad_full.reshape(-1, 2)[control.members].sum(axis=0)
-    return float(control.direction @ g)
+    return control.force(system)
 
 
-def _node_displacement(q, X, control):
-    return float(control.direction @ (q.reshape(-1, 2)[control.node] - X[control.node]))
+def _node_displacement(q, control):
+    return control.displacement(q)
+
+
+def _check_options(**options):
+    """Validate the numeric options of a driver; returns them cleaned (ints as int)."""
+    out = {}
+    for name, (value, kind, low, high, unit) in options.items():
+        if value is None and kind.endswith("?"):
+            out[name] = None
+            continue
+        if kind.startswith("int"):
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+                raise ValueError(f"{name} must be an integer in [{low}, {high}]; got {value!r}")
+            value = int(value)
+        else:
+            value = _real_scalar(value, name, unit)
+        if not (np.isfinite(value) and low <= value <= high) or (kind.startswith("pos") and value <= 0):
+            rng = f"> 0 and <= {high:g}" if kind.startswith("pos") else f"in [{low:g}, {high:g}]"
+            raise ValueError(f"{name} must be finite and {rng}{' ' + unit if unit else ''}; "
+                             f"got {value!r}")
+        out[name] = value
+    return out
+
+
+def _driver_options(steps, tol, max_iter, max_steps, min_step_ratio, max_step, switch_size,
+                    max_switches, time_limit):
+    return _check_options(
+        steps=(steps, "int", 1, 10**7, ""),
+        tol=(tol, "pos", 0.0, 1e-1, "(relative)"),
+        max_iter=(max_iter, "int", 1, 10**4, ""),
+        max_steps=(max_steps, "int", 1, 10**8, ""),
+        min_step_ratio=(min_step_ratio, "pos", 0.0, 1.0, "(relative)"),
+        max_step=(max_step, "pos?", 0.0, 1e300, "m"),
+        switch_size=(switch_size, "pos", 0.0, 1e3, "(fraction of the first step)"),
+        max_switches=(max_switches, "int", 0, 10**4, ""),
+        time_limit=(time_limit, "pos?", 0.0, 1e9, "s"),
+    )
 
 
 class _Recorder:
-    def __init__(self):
+    """Collects the converged states of a path (through the structure's interface only)."""
+
+    def __init__(self, structure):
+        self.structure = structure
         self.rows = {k: [] for k in ("d", "F", "q", "E", "it", "neg", "negd")}
+        self.fields = {}
 
     def add(self, d, F, q, E, it, neg, negd):
-        for k, v in zip(self.rows, (d, F, q.copy(), E, it, neg, negd)):
+        st = self.structure
+        pos = np.array(st.positions_of(q), dtype=float, copy=True)
+        for k, v in zip(self.rows, (d, F, pos, E, it, neg, negd)):
             self.rows[k].append(v)
+        for k, v in st.state_fields(q).items():
+            self.fields.setdefault(k, []).append(np.array(v, dtype=float, copy=True))
 
-    def path(self, n_nodes, status, method, info, critical_points=()):
+    def path(self, status, method, info, critical_points=()):
         r = self.rows
+        st = self.structure
         return Path(
             displacement=np.array(r["d"], dtype=float),
             force=np.array(r["F"], dtype=float),
-            positions=np.array(r["q"], dtype=float).reshape(-1, n_nodes, 2),
+            positions=np.array(r["q"], dtype=float).reshape(-1, st.n_nodes, int(st.dim)),
             status=status,
             method=method,
             energy=np.array(r["E"], dtype=float),
@@ -187,6 +315,7 @@ class _Recorder:
             negative_eigenvalues_displacement=np.array(r["negd"], dtype=np.int64),
             info=info,
             critical_points=list(critical_points),
+            fields={k: np.array(v) for k, v in self.fields.items()},
         )
 
 
@@ -232,33 +361,62 @@ def _newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move):
     return -1
 
 
-def equilibrium(structure, positions, node, direction, force, tol=1e-9, max_iter=40):
-    """Newton from ``positions`` (n_nodes, 2) to the equilibrium under ``force`` (N) on
-    ``node`` along ``direction``. Raises ConvergenceError when it fails."""
-    q = structure._flat(positions).copy()
+def state_from(structure, positions, name="positions"):
+    """A full state vector from ``positions``: (n_nodes, dim) node positions (m; the
+    structure's other state components, e.g. 3-D twist, start stress free) or a full state
+    vector; None gives the stress-free state."""
+    q0 = structure.initial_state()
+    if positions is None:
+        return q0
+    arr = _real_array(positions, name)
+    shape = (structure.n_nodes, int(structure.dim))
+    if arr.shape == q0.shape:
+        q = np.ascontiguousarray(arr.copy())
+    elif arr.shape == shape:
+        q = q0
+        dofs = np.array([structure.node_dofs(i) for i in range(structure.n_nodes)])
+        q[dofs] = arr
+    else:
+        raise ValueError(f"{name} must have shape {shape} (m) or {q0.shape}; got {arr.shape}")
     if not np.all(np.isfinite(q)):
-        raise ValueError("positions contain NaN or infinite values")
-    force = float(force)
+        raise ValueError(f"{name} contain NaN or infinite values")
+    return q
+
+
+def equilibrium(structure, positions, node, direction, force, tol=1e-9, max_iter=40):
+    """Newton from ``positions`` (n_nodes, dim) m to the equilibrium under ``force`` (N) on
+    ``node`` along ``direction``. Raises ConvergenceError when it fails."""
+    q = state_from(structure, positions)
+    force = _real_scalar(force, "force", "N")
     if not np.isfinite(force):
         raise ValueError(f"force must be finite (N); got {force!r}")
+    opts = _check_options(tol=(tol, "pos", 0.0, 1e-1, "(relative)"),
+                          max_iter=(max_iter, "int", 1, 10**4, ""))
     system = structure.reduced_system()
-    length, fscale = _scales(structure)
+    length, fscale = structure.scales()
     P = None
     if node is not None:
-        control = make_control(structure, node, direction, 1.0, "mgdc")
+        control = make_control(structure, node, direction, 1e-3 * length, "mgdc")
         P = _load_vector(system, control)
-    tol_force = tol * max(fscale, abs(force))
-    it = _newton(system, q, force, P, tol_force, TOL_DISP * length, max_iter, 0.25 * length)
+    tol_force = opts["tol"] * max(fscale, abs(force))
+    it = _newton(system, q, force, P, tol_force, TOL_DISP * length, opts["max_iter"],
+                 0.25 * length)
     if it < 0:
         raise ConvergenceError(
             f"equilibrium not found within {max_iter} Newton iterations from the given state"
         )
+    system.accept(q)
     info = {
         "iterations": it,
         "energy": system.energy,
         "negative_eigenvalues": system.negative_eigenvalues,
+        "state": q,
     }
-    return q.reshape(-1, 2), info
+    return structure.positions_of(q), info
+
+
+def _timed_out(t0, time_limit):
+    return time_limit is not None and time.perf_counter() - t0 > time_limit
 
 
 # ---------------------------------------------------------------------- displacement control
@@ -276,6 +434,7 @@ def follow_displacement(
     critical=True,
     switch_size=0.5,
     max_switches=8,
+    time_limit=None,
 ):
     """Prescribe the node's displacement along an axis from 0 to ``control.distance``.
 
@@ -286,43 +445,54 @@ def follow_displacement(
     ``branch``: at a bifurcation, "follow" the branch a push rig follows (leave along
     the critical mode) or stay on the "primary" one; ``switch_size``: the perturbation
     as a fraction of the first step (distance / steps); at most ``max_switches`` switches.
+    ``time_limit`` (s): wall time after which the path ends with status "timeout: ...";
+    at most ``max_steps`` steps ("stopped: ...").
     """
+    t0 = time.perf_counter()
     _check_branch(branch)
-    X = structure.reference_positions
+    o = _driver_options(steps, tol, max_iter, max_steps, min_step_ratio, max_step,
+                        switch_size, max_switches, time_limit)
+    steps, tol, max_iter, max_steps = o["steps"], o["tol"], o["max_iter"], o["max_steps"]
+    time_limit = o["time_limit"]
     axis = control.axis
     system = structure.reduced_system(extra_fixed=[(control.node, axis)])
-    length, fscale = _scales(structure)
-    q = X.reshape(-1).copy()
-    rec = _Recorder()
+    length, fscale = structure.scales()
+    unit = _load_unit(fscale)
+    q0 = structure.initial_state()
+    held = control.member_dofs[:, axis]
+    q = q0.copy()
+    rec = _Recorder(structure)
     system.evaluate(q)
     system.factor()
     rec.add(0.0, 0.0, q, system.energy, 0, system.negative_eigenvalues, system.negative_eigenvalues)
     monitor = None
     if critical:
         monitor = BranchMonitor(structure, control, branch, tol, fscale, length,
-                                nominal_step=control.distance / max(int(steps), 1),
-                                switch_size=switch_size, max_switches=max_switches)
+                                nominal_step=control.distance / steps,
+                                switch_size=o["switch_size"], max_switches=o["max_switches"],
+                                load_unit=unit, rig_step=o["switch_size"] * control.distance / steps)
         monitor.start(PathState(q.copy(), 0.0, 0.0, -1, system.negative_eigenvalues, 0.0, 1.0,
                                 system.energy))
-    dd0 = control.distance / max(int(steps), 1)
-    dd_max = dd0 if max_step is None else float(max_step)
+    dd0 = control.distance / steps
+    dd_max = dd0 if o["max_step"] is None else o["max_step"]
     dd = dd0
     d = 0.0
     q_prev, d_prev = None, 0.0
     status = "ok"
     sign = control.direction[axis]
-    t0 = time.perf_counter()
     while d < control.distance * (1 - 1e-12):
         if len(rec.rows["d"]) > max_steps:
             status = f"stopped: more than {max_steps} steps"
+            break
+        if _timed_out(t0, time_limit):
+            status = f"timeout: time_limit {time_limit:g} s reached at d = {d:.6g} m"
             break
         step = min(dd, control.distance - d)
         q_try = q.copy()
         if q_prev is not None and d - d_prev > 0:
             q_try += (q - q_prev) * (step / (d - d_prev))
         target = d + step
-        for m in control.members:
-            q_try[2 * m + axis] = X[m, axis] + sign * target
+        q_try[held] = q0[held] + sign * target
         fmax = max(fscale, abs(rec.rows["F"][-1]))
         it = _newton(system, q_try, 0.0, None, tol * fmax, TOL_DISP * length, max_iter, 0.25 * length)
         if (it >= 0 and monitor is not None and step > CROSSING_REFINE * dd0
@@ -331,7 +501,7 @@ def follow_displacement(
             continue
         if it < 0:
             dd = step / 2
-            if dd < min_step_ratio * dd0:
+            if dd < o["min_step_ratio"] * dd0:
                 status = (
                     f"not converged: displacement control failed near d = {d:.6g} m "
                     "(step size underflow; a snap-back? use method='mgdc')"
@@ -340,15 +510,16 @@ def follow_displacement(
             continue
         q_prev, d_prev = q, d
         q, d = q_try, target
-        F = _node_force(system, control)
+        system.accept(q)
+        F = control.force(system)
         neg = system.negative_eigenvalues
         iterations = it
         if monitor is not None:
-            new = PathState(q.copy(), F, d, -1, neg, 0.0, 1.0, system.energy)
+            new = PathState(q.copy(), F / unit, d, -1, neg, 0.0, 1.0, system.energy)
             reroute = monitor.observe(new, len(rec.rows["d"]) - 1)
             if reroute is not None:
                 c = reroute.critical
-                rec.add(c.d, c.lam, c.q, c.energy, 0, c.neg_disp, c.neg_disp)
+                rec.add(c.d, c.lam * unit, c.q, c.energy, 0, c.neg_disp, c.neg_disp)
                 # continue from the first state on the new branch; the next predictor
                 # extrapolates along the branch's tangent dq/dd there
                 q, d, iterations = reroute.state.q.copy(), reroute.state.d, 0
@@ -358,7 +529,8 @@ def follow_displacement(
                     q_prev, d_prev = q - reroute.rate * dd, d - dd
                 system.evaluate(q)
                 system.factor()
-                F = _node_force(system, control)
+                system.accept(q)
+                F = control.force(system)
                 neg = system.negative_eigenvalues
         rec.add(d, F, q, system.energy, iterations, neg, neg)
         if it <= 3:
@@ -366,7 +538,7 @@ def follow_displacement(
         if stop is not None and stop(rec.rows):
             break
     info = {"wall_time": time.perf_counter() - t0, "bandwidth": system.bandwidth, "n_dofs": system.n}
-    return rec.path(structure.n_nodes, status, "displacement", _monitor_info(info, monitor),
+    return rec.path(status, "displacement", _monitor_info(info, monitor),
                     monitor.points if monitor is not None else ())
 
 
@@ -387,6 +559,7 @@ def follow_mgdc(
     critical=True,
     switch_size=0.5,
     max_switches=8,
+    time_limit=None,
 ):
     """Load-controlled path with MGDC until the node's displacement reaches
     ``control.distance``.
@@ -396,25 +569,33 @@ def follow_mgdc(
     default 8 x the first's); a step that needs more than ``max_accept_iter`` iterations
     is retried at half the size.
     ``stop(path_arrays)`` may end the path early.
-    ``critical``, ``branch``, ``switch_size``, ``max_switches``: as for
-    `follow_displacement` (critical points and branch switching).
+    ``critical``, ``branch``, ``switch_size``, ``max_switches``, ``time_limit``,
+    ``max_steps``: as for `follow_displacement` (critical points and branch switching).
     """
+    t0 = time.perf_counter()
     _check_branch(branch)
-    X = structure.reference_positions
+    o = _driver_options(steps, tol, max_iter, max_steps, min_step_ratio, max_step,
+                        switch_size, max_switches, time_limit)
+    o.update(_check_options(max_accept_iter=(max_accept_iter, "int", 1, 10**4, ""),
+                            target_iterations=(target_iterations, "int", 1, 10**4, "")))
+    steps, tol, max_iter, max_steps = o["steps"], o["tol"], o["max_iter"], o["max_steps"]
+    time_limit = o["time_limit"]
     system = structure.reduced_system()
-    length, fscale = _scales(structure)
+    length, fscale = structure.scales()
     tol_disp = TOL_DISP * length
-    P = _load_vector(system, control)
-    r_node = np.array([system.dof_map[2 * control.node + c] for c in range(2)])
+    # the load factor lam is the force in units of `unit` N (see `_load_unit`)
+    unit = _load_unit(fscale)
+    P = _load_vector(system, control) * unit
+    r_node = np.array([system.dof_map[dof] for dof in control.dofs])
     n_free = np.where(r_node >= 0, control.direction, 0.0)
     r_idx = np.where(r_node >= 0, r_node, 0)
 
     def node_component(u):
         return float(n_free @ u[r_idx])
 
-    q = X.reshape(-1).copy()
+    q = structure.initial_state()
     lam = 0.0
-    rec = _Recorder()
+    rec = _Recorder(structure)
     system.evaluate(q)
     if not system.factor():
         raise ValueError(
@@ -423,7 +604,7 @@ def follow_mgdc(
         )
     uP = system.solve(P)
     rec.add(0.0, 0.0, q, system.energy, 0, system.negative_eigenvalues, system.negative_eigenvalues)
-    dd0 = control.distance / max(int(steps), 1)
+    dd0 = control.distance / steps
     flex = node_component(uP)
     if not flex > 0:
         raise ValueError("the pushed node does not move along the direction under load")
@@ -433,19 +614,19 @@ def follow_mgdc(
     monitor = None
     if critical:
         monitor = BranchMonitor(structure, control, branch, tol, fscale, length, s0,
-                                system=system, switch_size=switch_size,
-                                max_switches=max_switches)
+                                system=system, switch_size=o["switch_size"],
+                                max_switches=o["max_switches"], load_unit=unit,
+                                rig_step=o["switch_size"] * 0.25 * dd0)
         neg0 = system.negative_eigenvalues
         monitor.start(PathState(q.copy(), 0.0, 0.0, neg0, neg0, 1.0, 1.0, system.energy))
     s = s0
-    s_max = 8.0 * s0 if max_step is None else float(max_step)
+    s_max = 8.0 * s0 if o["max_step"] is None else o["max_step"]
     sign = 1.0
     step_prev = None
     status = "ok"
     d = 0.0
     rejected = 0
     total_iterations = 0
-    t0 = time.perf_counter()
     while d < control.distance:
         if len(rec.rows["d"]) > max_steps:
             status = f"stopped: more than {max_steps} steps"
@@ -457,11 +638,15 @@ def follow_mgdc(
         uP1 = uP
         converged = False
         while not converged:
+            if _timed_out(t0, time_limit):
+                status = (f"timeout: time_limit {time_limit:g} s reached at d = {d:.6g} m, "
+                          f"F = {lam * unit:.6g} N")
+                break
             q_try = q.copy()
             dlam = sign * s / np.linalg.norm(uP1)
             lam_try = lam + dlam
             system.increment(q_try, uP1, dlam)
-            fmax = max(fscale, abs(lam_try))
+            fmax = max(fscale, abs(lam_try) * unit)
             du_max = np.inf
             for it in range(1, max_iter + 1):
                 fstat, r_max, du_step, dl = system.fused_mgdc(
@@ -499,7 +684,7 @@ def follow_mgdc(
             # A corrector that wandered far from its predictor may have jumped to another
             # branch: reject the step and retry with half the size.
             # Too many iterations also means the predictor overshot a strongly curved path.
-            if converged and (np.linalg.norm(q_try - q) > 4.0 * s or it > max_accept_iter):
+            if converged and (system.step_norm(q_try, q) > 4.0 * s or it > max_accept_iter):
                 converged = False
             uP_try = None
             if converged and monitor is not None and s > CROSSING_REFINE * s0:
@@ -508,10 +693,10 @@ def follow_mgdc(
             if not converged:
                 rejected += 1
                 s *= 0.5
-                if s < min_step_ratio * s0:
+                if s < o["min_step_ratio"] * s0:
                     status = (
                         f"not converged: MGDC step size underflow near d = {d:.6g} m, "
-                        f"F = {lam:.6g} N"
+                        f"F = {lam * unit:.6g} N"
                     )
                     break
                 # restore the factorisation at the last converged state for the next try
@@ -522,8 +707,9 @@ def follow_mgdc(
         # accepted: the system holds K at q_try
         step_prev = system.reduced(q_try) - system.reduced(q)
         q, lam = q_try, lam_try
+        system.accept(q)
         uP = system.solve(P) if uP_try is None else uP_try
-        d = _node_displacement(q, X, control)
+        d = control.displacement(q)
         neg = system.negative_eigenvalues
         # Schur complement: dF/dd of the pushed node is 1 / (n . u_P); a negative one
         # accounts for one negative eigenvalue that holding the displacement removes.
@@ -538,14 +724,18 @@ def follow_mgdc(
             reroute = monitor.observe(new, len(rec.rows["d"]) - 1)
             if reroute is not None:
                 c, s_new = reroute.critical, reroute.state
-                rec.add(c.d, c.lam, c.q, c.energy, 0, c.neg_force, c.neg_disp)
+                rec.add(c.d, c.lam * unit, c.q, c.energy, 0, c.neg_force, c.neg_disp)
                 # the monitor left the system factorised at the first state of the new branch
                 q, lam, step_prev = s_new.q.copy(), s_new.lam, reroute.step
+                system.accept(q)
                 uP = system.solve(P)
-                s = max(s, s0)  # steps were refined onto the point: start afresh
+                # Restart at a step half the distance from the point: near a bifurcation
+                # the other branches are that close, and a longer step could land on one
+                # of them (a wrong reversal); steps then grow by 1.5 per step.
+                s = min(max(s, 0.5 * reroute.distance), s_max)
                 d, neg, negd = s_new.d, s_new.neg_force, s_new.neg_disp
                 energy, iterations = s_new.energy, 0
-        rec.add(d, lam, q, energy, iterations, neg, negd)
+        rec.add(d, lam * unit, q, energy, iterations, neg, negd)
         if it <= target_iterations - 1:
             s = min(1.5 * s, s_max)
         elif it >= target_iterations + 3:
@@ -563,7 +753,7 @@ def follow_mgdc(
         "rejected_steps": rejected,
         "total_iterations": total_iterations,
     }
-    return rec.path(structure.n_nodes, status, "mgdc", _monitor_info(info, monitor),
+    return rec.path(status, "mgdc", _monitor_info(info, monitor),
                     monitor.points if monitor is not None else ())
 
 

@@ -31,6 +31,7 @@ __all__ = [
     "state_stability",
     "critical_modes",
     "expand_mode",
+    "expand_full",
     "eigenmodes",
     "seed_imperfection",
 ]
@@ -65,8 +66,9 @@ class CriticalPoint:
     index: path row just before the point (the point lies between rows index and index + 1,
       or is row index + 1 when the path was rerouted through it);
     d (m), F (N): the pushed node's displacement and force at the point;
-    positions: (n_nodes, 2) m, or None when the point was not solved for;
-    mode: (n_nodes, 2) critical eigenvector (unit 2-norm over the free DOFs), or None;
+    positions: (n_nodes, dim) m, or None when the point was not solved for;
+    mode: (n_nodes, dim) critical eigenvector (unit 2-norm over the free DOFs; its position
+      components), or None;
     eigenvalue: of the reduced K at the located point, N/m (close to zero);
     multiplicity: how many eigenvalues cross; located: solved to tolerance (not read off a
       step); switched: the path left along another branch here.
@@ -93,21 +95,23 @@ def held_count(negative_force: int, flexibility: float) -> int:
 
 def state_stability(structure, positions, node, direction=(0.0, -1.0),
                     system=None) -> StateStability:
-    """Stability of the equilibrium ``positions`` (n_nodes, 2) m of ``structure`` with a
+    """Stability of the equilibrium ``positions`` (n_nodes, dim) m or full state vector of
+    ``structure`` with a
     load on ``node`` along ``direction``: counts under force and displacement control.
 
     The state need not be solved here; it should be an equilibrium for the counts to mean
     stability. ``system``: the structure's `reduced_system()` to reuse (several states).
     Raises ValueError when K is singular (a critical state)."""
-    from solver.continuation import _load_vector, make_control
+    from solver.continuation import _load_unit, _load_vector, make_control, state_from
 
-    control = make_control(structure, node, direction, 1.0, "mgdc")
+    length, fscale = structure.scales()
+    control = make_control(structure, node, direction, 1e-3 * length, "mgdc")
     if system is None:
         system = structure.reduced_system()
-    system.evaluate(structure._flat(positions))
+    system.evaluate(state_from(structure, positions))
     if not system.factor():
         raise ValueError("the tangent stiffness is singular at this state (a critical point)")
-    P = _load_vector(system, control)
+    P = _load_vector(system, control) * _load_unit(fscale)  # exact scaling: no underflow
     flexibility = float(P @ system.solve(P))
     neg = system.negative_eigenvalues
     return StateStability(neg, held_count(neg, flexibility))
@@ -140,10 +144,18 @@ def critical_modes(band, count, around, P=None):
     return w, v
 
 
-def expand_mode(system, vector) -> np.ndarray:
-    """Reduced DOF vector -> (n_nodes, 2) nodal vector (fixed DOFs zero, shared DOFs equal)."""
-    full = np.where(system.dof_map >= 0, vector[np.maximum(system.dof_map, 0)], 0.0)
-    return full.reshape(-1, 2)
+def expand_full(system, vector) -> np.ndarray:
+    """Reduced DOF vector -> full state-sized vector (fixed DOFs zero, shared DOFs equal)."""
+    return np.where(system.dof_map >= 0, vector[np.maximum(system.dof_map, 0)], 0.0)
+
+
+def expand_mode(system, vector, structure=None) -> np.ndarray:
+    """Reduced DOF vector -> (n_nodes, dim) nodal vector (fixed DOFs zero, shared DOFs
+    equal); the position components of `expand_full` (planar when ``structure`` is None)."""
+    full = expand_full(system, vector)
+    if structure is None:
+        return full.reshape(-1, 2)
+    return np.array(structure.positions_of(full), copy=True)
 
 
 def eigenmodes(structure, count=6, positions=None, hold=()):
@@ -151,27 +163,29 @@ def eigenmodes(structure, count=6, positions=None, hold=()):
     (default: the stress-free shape), with the (node, component) pairs in ``hold`` held too
     (e.g. ``[(apex, 1)]`` for the pushed DOF under displacement control).
 
-    Returns (eigenvalues (count,) N/m, modes (count, n_nodes, 2)); each mode has unit 2-norm
+    Returns (eigenvalues (count,) N/m, modes (count, n_nodes, dim)); each mode has unit 2-norm
     over the free DOFs and its largest component positive. Use a mode as an imperfection
     shape with `seed_imperfection`."""
     system = structure.reduced_system(extra_fixed=list(hold) or None)
-    system.evaluate(structure._flat(positions))
+    from solver.continuation import state_from
+
+    system.evaluate(state_from(structure, positions))
     count = int(min(max(count, 1), system.n))
     w, v = scipy.linalg.eig_banded(system.band, lower=True, select="i",
                                    select_range=(0, count - 1), check_finite=False)
-    modes = np.empty((count, structure.n_nodes, 2))
+    modes = np.empty((count, structure.n_nodes, int(structure.dim)))
     for j in range(count):
         col = v[:, j]
         if col[np.argmax(np.abs(col))] < 0:
             col = -col
-        modes[j] = expand_mode(system, col)
+        modes[j] = expand_mode(system, col, structure)
     return w, modes
 
 
 def seed_imperfection(structure, shape, *, amplitude=None, thickness_fraction=None):
     """A copy of ``structure`` whose stress-free shape is the reference plus an imperfection.
 
-    ``shape``: (n_nodes, 2) nodal displacement pattern (e.g. a mode from `eigenmodes` or a
+    ``shape``: (n_nodes, dim) nodal displacement pattern (e.g. a mode from `eigenmodes` or a
     path's critical mode), scaled so that its largest nodal displacement is ``amplitude``
     (m) — or ``thickness_fraction`` times the smallest rod thickness. Sections, supports,
     ties, rigid groups and springs are copied; the new shape is stress free (reference
@@ -179,42 +193,18 @@ def seed_imperfection(structure, shape, *, amplitude=None, thickness_fraction=No
     equal displacements in ``shape`` (modes from this module do).
     """
     shape = np.asarray(shape, dtype=float)
-    if shape.shape != (structure.n_nodes, 2) or not np.all(np.isfinite(shape)):
-        raise ValueError(f"shape must be a finite ({structure.n_nodes}, 2) array; "
+    dim = int(structure.dim)
+    if shape.shape != (structure.n_nodes, dim) or not np.all(np.isfinite(shape)):
+        raise ValueError(f"shape must be a finite ({structure.n_nodes}, {dim}) array; "
                          f"got shape {shape.shape}")
     if (amplitude is None) == (thickness_fraction is None):
         raise ValueError("give exactly one of amplitude (m) or thickness_fraction")
     if amplitude is None:
-        t_min = min(float(np.min(rod.thickness)) for rod in structure.rods)
+        t_min = structure.min_thickness()
         amplitude = float(thickness_fraction) * t_min
     amplitude = float(amplitude)
-    peak = float(np.max(np.hypot(shape[:, 0], shape[:, 1])))
+    peak = float(np.max(np.linalg.norm(shape, axis=1)))
     if not np.isfinite(amplitude) or peak == 0.0:
         raise ValueError("the imperfection needs a finite amplitude and a non-zero shape")
-    X = structure.reference_positions + (amplitude / peak) * shape
-    return _rebuild(structure, X)
-
-
-def _rebuild(structure, X):
-    """The same rods, sections and constraints on new stress-free node positions ``X``."""
-    from solver.structure import Structure
-
-    new = Structure()
-    start = 0
-    for rod in structure.rods:
-        n = len(rod.nodes)
-        new.add_rod(X[start:start + n], rod.width, rod.thickness, rod.E)
-        start += n
-    for node, comps in structure._fixed.items():
-        for c in sorted(comps):
-            new.fix(node, "xz"[c])
-    rigid_pairs = set()
-    for group in structure._rigid_groups:
-        new.rigid(group)
-        rigid_pairs.update(zip(group[:-1], group[1:]))
-    for a, b in structure._merges:
-        if (a, b) not in rigid_pairs:
-            new.tie(a, b)
-    for (a, b), (k, _, _) in zip(structure._spring_nodes, structure._spring_params):
-        new.tie(a, b, method="spring", stiffness=k)
-    return new
+    X = structure.positions_of(structure.initial_state()) + (amplitude / peak) * shape
+    return structure.with_reference_positions(X)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver.continuation import TOL_DISP, ConvergenceError, _newton, _scales, make_control
+from solver.continuation import TOL_DISP, ConvergenceError, _newton, make_control, state_from
 
 
 class DisplacementProbe:
@@ -18,29 +18,31 @@ class DisplacementProbe:
 
     def __init__(self, structure, node, direction=(0.0, -1.0), tol=1e-9, max_iter=30):
         self.structure = structure
-        self.control = make_control(structure, node, direction, 1.0, "displacement")
+        self.length, self.fscale = structure.scales()
+        self.control = make_control(structure, node, direction, 1e-3 * self.length,
+                                    "displacement")
         self.system = structure.reduced_system(extra_fixed=[(self.control.node, self.control.axis)])
-        self.length, self.fscale = _scales(structure)
-        self.X = structure.reference_positions
+        self.q0 = structure.initial_state()
+        self.X = structure.positions_of(self.q0)  # (n_nodes, dim) stress-free positions, m
         self.tol = tol
         self.max_iter = max_iter
 
     def solve(self, guess, d):
-        """Equilibrium at displacement ``d`` (m) from ``guess`` (n_nodes, 2).
+        """Equilibrium at displacement ``d`` (m) from ``guess`` ((n_nodes, dim) positions or
+        a full state vector).
 
-        Returns (positions, force along the direction, negative eigenvalues with the
-        displacement held). Raises ConvergenceError."""
+        Returns (positions (n_nodes, dim), force along the direction, negative eigenvalues
+        with the displacement held). Raises ConvergenceError."""
         c = self.control
-        q = np.array(guess, dtype=float).reshape(-1)
-        sign = c.direction[c.axis]
-        for m in c.members:
-            q[2 * m + c.axis] = self.X[m, c.axis] + sign * d
+        q = state_from(self.structure, guess, "guess")
+        held = c.member_dofs[:, c.axis]
+        q[held] = self.q0[held] + c.direction[c.axis] * d
         it = _newton(self.system, q, 0.0, None, self.tol * self.fscale, TOL_DISP * self.length,
                      self.max_iter, 0.25 * self.length)
         if it < 0:
             raise ConvergenceError(f"no equilibrium found at prescribed d = {d:.6g} m")
-        g = self.system.grad_full.reshape(-1, 2)[c.members].sum(axis=0)
-        return q.reshape(-1, 2), float(c.direction @ g), self.system.negative_eigenvalues
+        self.system.accept(q)
+        return self.structure.positions_of(q), c.force(self.system), self.system.negative_eigenvalues
 
 
 def refine_maximum(probe, d, F, positions, i, tol_d=None):

@@ -79,7 +79,14 @@ class Structure:
     >>> st = Structure()
     >>> rod = st.add_rod(xz, width=5e-3, thickness=0.5e-3, E=2.2e9)
     >>> st.fix(rod.nodes[0], "xz"); path = st.push(rod.nodes[-1], (0, -1), 0.01)
+
+    The path followers use only the members listed in ``docs/problem-interface.md``
+    (``dim``, ``component_names``, ``initial_state``, ``node_dofs``, ``positions_of``,
+    ``state_fields``, ``scales``, ``supernodes``, ``fixed_components``, ``reduced_system``).
     """
+
+    dim = 2  # components per node position (x, z)
+    component_names = "xz"
 
     def __init__(self):
         self.rods: list[Rod] = []
@@ -155,6 +162,67 @@ class Structure:
         self._bend_params.append(np.stack([node_stiffness, kappa_bar], axis=1))
         self._cache = None
         return rod
+
+    # ------------------------------------------------------------------ problem interface
+    def initial_state(self) -> np.ndarray:
+        """The stress-free full state vector q0 (2 n_nodes,) m: a fresh copy every call."""
+        return self.reference_positions.reshape(-1).copy()
+
+    def node_dofs(self, node) -> np.ndarray:
+        """(2,) int64 indices into the state vector of ``node``'s x and z."""
+        node = int(node)
+        return np.array([2 * node, 2 * node + 1], dtype=np.int64)
+
+    def positions_of(self, q) -> np.ndarray:
+        """(n_nodes, 2) node positions (m) held in the state vector ``q`` (a view)."""
+        return np.asarray(q).reshape(-1, 2)
+
+    def state_fields(self, q) -> dict:
+        """Per-state arrays recorded on a path besides positions: none for planar rods."""
+        return {}
+
+    def scales(self):
+        """(length m, force N): the structure's size (largest extent of its reference shape)
+        and EI_max / length^2; tolerances and step sizes are taken relative to these."""
+        if not self.rods:
+            raise ValueError("the structure has no rods")
+        X = self.reference_positions
+        length = float(max(np.ptp(X[:, 0]), np.ptp(X[:, 1])))
+        if not length > 0.0:
+            length = float(max(np.max(np.abs(X)), 1e-300))
+        EI = max(float(np.max(r.EI)) for r in self.rods)  # N m^2
+        return length, EI / length**2
+
+    def with_reference_positions(self, positions) -> "Structure":
+        """A copy with the same rods, sections and constraints on new stress-free node
+        positions (n_nodes, 2) m (used by `solver.stability.seed_imperfection`)."""
+        X = np.asarray(positions, dtype=float)
+        if X.shape != (self.n_nodes, 2) or not np.all(np.isfinite(X)):
+            raise ValueError(f"positions must be a finite ({self.n_nodes}, 2) array in m; "
+                             f"got shape {X.shape}")
+        new = Structure()
+        start = 0
+        for rod in self.rods:
+            n = len(rod.nodes)
+            new.add_rod(X[start:start + n], rod.width, rod.thickness, rod.E)
+            start += n
+        for node, comps in self._fixed.items():
+            for c in sorted(comps):
+                new.fix(node, "xz"[c])
+        rigid_pairs = set()
+        for group in self._rigid_groups:
+            new.rigid(group)
+            rigid_pairs.update(zip(group[:-1], group[1:]))
+        for a, b in self._merges:
+            if (a, b) not in rigid_pairs:
+                new.tie(a, b)
+        for (a, b), (k, _, _) in zip(self._spring_nodes, self._spring_params):
+            new.tie(a, b, method="spring", stiffness=k)
+        return new
+
+    def min_thickness(self) -> float:
+        """The smallest section thickness of any rod, m."""
+        return min(float(np.min(rod.thickness)) for rod in self.rods)
 
     def _check_node(self, node, name="node"):
         if isinstance(node, (bool, np.bool_)) or not isinstance(node, (int, np.integer)):

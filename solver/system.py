@@ -121,6 +121,14 @@ class ReducedSystem:
         if status != 1:
             self.negative_eigenvalues = int(neg)
 
+    def accept(self, q):
+        """Hook called by the path followers after every accepted state (and after a
+        reroute): nothing to carry along for planar rods (3-D rods update their frames)."""
+
+    def step_norm(self, q_new, q_old):
+        """Size of a step between two full states (m), as the path followers measure it."""
+        return float(np.linalg.norm(q_new - q_old))
+
     def reduced(self, q):
         """Reduced DOF values of the full vector ``q``."""
         return q[self.representative]

@@ -3,5 +3,17 @@ base, and the paper's 2-D unit (two crossing arches on a square frame).
 
 `solver/` keeps the generic rod mechanics and path followers; the models of particular units
 live here and are re-exported where their public names lived before (`solver.unit`,
-`solver.unit_model`).
+`solver.unit_model`). The planar unit: `units.geometry` (`UnitGeometry`, meshing) and
+`units.planar` (`simulate_unit`, `UnitResult`), also importable from `units` itself.
 """
+
+_LAZY = {"UnitGeometry": "units.geometry", "build_unit": "units.geometry",
+         "simulate_unit": "units.planar", "UnitResult": "units.planar"}
+
+
+def __getattr__(name):  # lazy, so that importing units.<model> stays light
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'units' has no attribute {name!r}")

@@ -19,6 +19,8 @@ Lengths in units.csv are millimetres; units.csv has no b column (--b-over-L sets
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
+    from snapmorph.commands._common import integer, length_mm, number
+
     p = sub.add_parser("array", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     what = p.add_mutually_exclusive_group(required=True)
@@ -34,15 +36,22 @@ def add_parser(sub) -> argparse.ArgumentParser:
                    help="snapping order, 0-based unit indices, e.g. 2,0 (default ascending; "
                         "units listed but not snapped in --state are skipped)")
     p.add_argument("--all", action="store_true", help="with --units: every state (a study)")
-    p.add_argument("--b-over-L", type=float, default=0.0,
+    p.add_argument("--b-over-L", type=number("", 0.0, 0.5, low_inclusive=True,
+                                             high_inclusive=False, what="b / L"), default=0.0,
                    help="b / L of the arched units read from --units (default 0)")
-    p.add_argument("--b", type=float, default=None,
+    p.add_argument("--b", type=length_mm(0.0, low_inclusive=True, what="flat end length b"),
+                   default=None,
                    help="with --paper-three: b in mm (default 5 = w, the specimens)")
-    p.add_argument("--nodes", type=int, default=None,
+    p.add_argument("--nodes", type=integer(11, 100000, what="base nodes per unit"), default=None,
                    help="resolution: base nodes per unit (default 161, as snapmorph unit)")
-    p.add_argument("--E", type=float, default=2.2e9, help="Young's modulus, Pa (default PETG)")
+    p.add_argument("--E", type=number("Pa", 0.0, 1e13, what="Young's modulus"), default=2.2e9,
+                   help="Young's modulus, Pa (default PETG)")
     p.add_argument("--plot", default=None, help="single state: write a figure (PNG/PDF/SVG)")
     p.add_argument("--csv", default=None, help="single state: write the base polyline (mm)")
+    p.add_argument("--overlay", default=None, metavar="TARGET_CSV",
+                   help="with --units: draw this target (x_mm, y_mm) over the shapes")
+    p.add_argument("--no-placement", action="store_true",
+                   help="ignore units.csv's placement line: clamp at (0, 0), heading +x")
     p.add_argument("--no-fk", action="store_true",
                    help="skip the comparison with forward kinematics")
     p.add_argument("--out", default=None,
@@ -67,7 +76,26 @@ def _check(args):
         raise CommandError(f"--b-over-L must be in [0, 0.5); got {args.b_over_L}")
     if args.b is not None and args.b < 0:
         raise CommandError(f"--b must be >= 0 mm; got {args.b}")
+    if args.overlay and not args.units:
+        raise CommandError("--overlay needs --units")
+    _check_paths(args, study)
     return study
+
+
+def _check_paths(args, study):
+    """Refuse unreadable inputs and unwritable outputs before simulating anything."""
+    from snapmorph.commands._common import input_file, output_dir, output_file, plot_file
+
+    if args.units:
+        input_file(args.units, "--units")
+    if args.overlay:
+        input_file(args.overlay, "--overlay")
+    if study:
+        if args.out:
+            output_dir(args.out, "--out")
+    else:
+        plot_file(args.plot, "--plot")
+        output_file(args.csv, "--csv")
 
 
 def run(args) -> int:
@@ -78,8 +106,6 @@ def run(args) -> int:
     if study:
         from design.array_plots import plot_study
         from design.array_study import paper_three_units, run_study, table3_M_units
-        from design.units import read_units_csv
-
         if args.paper_three:
             b = None if args.b is None else args.b * 1e-3
             units = paper_three_units(b)
@@ -87,19 +113,38 @@ def run(args) -> int:
             folder = "three_units"
         elif args.paper_M:
             units, name, folder = table3_M_units(), "paper Table 3 M (b = 0)", "M"
-        else:
-            units = read_units_csv(args.units, b_over_L=args.b_over_L)
+        placement = target = None
+        if args.units:
+            units, placement, target = _read_units(args)
             name, folder = str(args.units), Path(args.units).stem
-        out = Path(args.out) if args.out else Path("build/array") / folder
+        from snapmorph.commands._common import output_dir
+
+        out = output_dir(Path(args.out) if args.out else Path("build/array") / folder, "--out")
+        from snapmorph.commands.fk import _check_all
+
+        _check_all(units, 8, "--all")
+        n_arched = sum(not u.is_spacer for u in units)
+        print(f"simulating {2 ** n_arched} states of {len(units)} units (a few seconds each) ...",
+              flush=True)
         s = run_study(units, name=name, nodes=args.nodes, E=args.E, fk=not args.no_fk)
         print(s.table())
-        out.mkdir(parents=True, exist_ok=True)
         (out / "study.md").write_text(s.table() + "\n")
         (out / "study.json").write_text(json.dumps(s.summary(), indent=1, default=float) + "\n")
-        png = plot_study(s, out / "states.png", title=name)
+        png = plot_study(s, out / "states.png", title=name, placement=placement, target=target)
         print(f"wrote {out / 'study.md'}, {out / 'study.json'}, {png}")
         return 0 if s.ok else 1
     return _one_state(args)
+
+
+def _read_units(args):
+    """(units, placement or None, overlay target in m or None) from --units / --overlay."""
+    from design.targets import read_target_csv
+    from design.units import read_placement, read_units_csv
+
+    units = read_units_csv(args.units, b_over_L=args.b_over_L)
+    placement = None if args.no_placement else read_placement(args.units)
+    target = read_target_csv(args.overlay)[0] if args.overlay else None
+    return units, placement, target
 
 
 def _one_state(args) -> int:
@@ -109,14 +154,21 @@ def _one_state(args) -> int:
 
     from design.array_study import curve_deviation
     from design.arrays import simulate_array
-    from design.kinematics import chain, parse_state
-    from design.units import read_units_csv
+    from design.kinematics import chain
+    from design.targets import distances_to_polyline
+    from snapmorph.commands.fk import check_state
+    from snapmorph.plotting.arrays import transform
 
-    units = read_units_csv(args.units, b_over_L=args.b_over_L)
-    if args.state is None:
-        snapped = [not u.is_spacer for u in units]
-    else:
-        snapped = parse_state(args.state, len(units))
+    units, placement, target = _read_units(args)
+    snapped = check_state(args.state, units)
+    if args.order is not None:
+        from design.arrays import _order
+        from snapmorph.commands._common import CommandError
+
+        try:
+            _order(args.order, snapped, len(units))
+        except ValueError as exc:
+            raise CommandError(f"--order {args.order}: {exc} (e.g. --order 2,0)") from None
     r = simulate_array(units, snapped, order=args.order, nodes=args.nodes, E=args.E)
     key = "".join("1" if s else "0" for s in snapped)
     print(f"state {key}: {len(units)} units, snapped in the order "
@@ -135,15 +187,28 @@ def _one_state(args) -> int:
               f"{100 * curve_deviation(r.base, fk, length):.3f} % of the array length, tip "
               f"{np.hypot(*(r.base[-1] - fk[-1])) * 1e3:.3f} mm, end direction "
               f"{math.degrees(r.angles[-1] - ch.angles[-1]):+.3f} deg")
-    print(f"{'joint':>5} {'x_mm':>9} {'z_mm':>9} {'dir_deg':>8}")
-    for i, (p, a) in enumerate(zip(r.joints, r.angles)):
-        print(f"{i:>5} {p[0] * 1e3:9.2f} {p[1] * 1e3:9.2f} {math.degrees(a):8.2f}")
+    turn0 = placement[2] if placement else 0.0
+    joints, base = transform(r.joints, placement), transform(r.base, placement)
+    if placement:
+        print(f"frame: the target's (units.csv placement: clamp at ({placement[0] * 1e3:.2f}, "
+              f"{placement[1] * 1e3:.2f}) mm, heading {math.degrees(turn0):.2f} deg)")
+    print(f"{'joint':>5} {'x_mm':>9} {'y_mm':>9} {'dir_deg':>8}")
+    for i, (p, a) in enumerate(zip(joints, r.angles)):
+        print(f"{i:>5} {p[0] * 1e3:9.2f} {p[1] * 1e3:9.2f} {math.degrees(a + turn0):8.2f}")
+    if target is not None:
+        dist = distances_to_polyline(target, base)
+        print(f"overlay {args.overlay}: {len(target)} target points, largest distance to the "
+              f"simulated base {dist.max() * 1e3:.2f} mm (point {int(dist.argmax()) + 1})")
     if args.csv:
-        np.savetxt(args.csv, r.base * 1e3, delimiter=",", fmt="%.5f", header="x_mm,z_mm",
+        np.savetxt(args.csv, base * 1e3, delimiter=",", fmt="%.5f", header="x_mm,y_mm",
                    comments="")
         print(f"wrote {args.csv}")
     if args.plot:
         from design.array_plots import plot_result
 
-        print(f"wrote {plot_result(r, args.plot, fk, title=f'state {key}')}")
+        frame = ("target's frame (units.csv placement)" if placement else
+                 "array frame: clamp at (0, 0), heading +x")
+        figure = plot_result(r, args.plot, fk, title=f"state {key} (1 = snapped); {frame}",
+                             placement=placement, target=target)
+        print(f"wrote {figure}")
     return 0 if r.status == "ok" else 1

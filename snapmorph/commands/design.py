@@ -1,4 +1,8 @@
-"""`snapmorph design`: inverse design of an array from a target shape (paper, Section 4)."""
+"""`snapmorph design`: inverse design of an array from a target shape (issue 10).
+
+Exit status: 0 when the design meets --tol, 1 when it does not (the best design found is still
+written, and marked so in design.txt and units.csv), 2 for bad input (one line, in mm).
+"""
 
 from __future__ import annotations
 
@@ -10,26 +14,47 @@ HELP = "design an array of units that snaps into a target shape; write units.csv
 def add_parser(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "design", help=HELP, description=HELP + ".",
-        epilog="target.csv: lines 'x_mm, y_mm' (x increasing; spline through them) or "
-               "'x_mm, y_mm, tangent_deg' (control points with tangents, e.g. circular segments).",
+        epilog="target: a CSV of lines 'x_mm, y_mm' (any open curve, in any orientation) or "
+               "'x_mm, y_mm, tangent_deg' (control points with tangents: biarcs through them); "
+               "an SVG file (the first <path>'s d: lines, arcs, Béziers; units mm, y up as seen); "
+               "or a DXF file (the first polyline, mm). Exit status 1 when --tol is missed.",
     )
-    p.add_argument("target", help="target CSV in mm")
+    p.add_argument("target", help="target file: .csv, .svg or .dxf (mm)")
     p.add_argument("--t", type=float, required=True, help="sheet thickness (mm)")
     p.add_argument("--w", type=float, required=True, help="strip width (mm)")
     p.add_argument("--out", default="build/design", help="output directory (default %(default)s)")
     p.add_argument("--map", default=None, help="design map netCDF (default: the committed map)")
+    p.add_argument("--tol", type=float, default=0.01,
+                   help="largest deviation allowed, a fraction of the target's length "
+                        "(default %(default)s = 1 %%)")
+    p.add_argument("--placement", choices=("best", "clamped"), default="best",
+                   help="the deviation --tol applies to: after the best rigid placement, or with "
+                        "unit 1's start clamped on the target's start and tangent "
+                        "(default %(default)s; both are printed)")
+    p.add_argument("--L-range", default=None, metavar="MIN,MAX",
+                   help="unit length range (mm; default: what the map covers at t, w)")
+    p.add_argument("--hL-range", default=None, metavar="MIN,MAX",
+                   help="h/L range (default: bistable in the map with --min-barrier)")
+    p.add_argument("--min-barrier", type=float, default=0.5,
+                   help="smallest energy barrier of a unit, E I_arch / L (default %(default)s)")
+    p.add_argument("--max-units", type=int, default=40, help="at most this many arched units")
+    p.add_argument("--state", choices=("released", "actuated"), default="released",
+                   help="unit state the map is entered with (default %(default)s: actuator "
+                        "removed, as used)")
+    p.add_argument("--theta-convention", choices=("ours", "paper"), default="ours",
+                   help="'paper': the paper's procedure entering the map with theta_end "
+                        "(reproduces its Table 3; such designs over-curve about twice)")
+    p.add_argument("--no-verify", action="store_true",
+                   help="skip the whole-array simulation of the design")
     p.add_argument("--controls", default=None,
-                   help="x (mm) of interior control points, comma separated (default: automatic)")
-    p.add_argument("--tol", type=float, default=1.0,
-                   help="automatic control points: target max deviation, %% of the target length "
-                        "(default %(default)s)")
+                   help="the paper's procedure: x (mm) of interior control points, comma "
+                        "separated (target x increasing)")
     p.add_argument("--max-controls", type=int, default=9,
-                   help="automatic control points: at most this many (default %(default)s)")
+                   help="paper's procedure, automatic control points: at most this many")
     p.add_argument("--min-turn", type=float, default=None,
-                   help="arcs turning less (deg) become straight spacers (default: the map's "
-                        "smallest bistable θ)")
+                   help="paper's procedure: arcs turning less (deg) become straight spacers")
     p.add_argument("--refine", action="store_true",
-                   help="adjust every unit's (L, h) by least squares on the deviation")
+                   help="paper's procedure: also refine (L, h) by least squares")
     p.add_argument("--bed", type=float, default=None,
                    help="laser bed length (mm): split the base strip into pieces no longer")
     p.add_argument("--colours", default=None,
@@ -39,45 +64,84 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
+def _pair_mm(text, option, scale):
+    from snapmorph.cli import CommandError
+
+    if text is None:
+        return None
+    try:
+        a, b = (float(v) for v in text.split(","))
+    except ValueError:
+        raise CommandError(f"{option} must be MIN,MAX (two numbers), got {text!r}") from None
+    if not (0 < a < b < float("inf")):
+        raise CommandError(f"{option} must be MIN,MAX with 0 < MIN < MAX, got {text!r}")
+    return a * scale, b * scale
+
+
 def run(args) -> int:
+    import math
+    import warnings
     from pathlib import Path
 
     import numpy as np
 
-    from design import inverse_design
-    from design.lookup import load_map
+    from snapmorph.cli import CommandError
 
-    for name in ("t", "w"):
+    for name, what in (("t", "sheet thickness"), ("w", "strip width")):
         value = getattr(args, name)
-        if not (value > 0 and np.isfinite(value)):
-            raise ValueError(f"--{name} must be a positive thickness/width in mm, got {value}")
+        if not (value > 0 and math.isfinite(value)):
+            raise CommandError(f"--{name} must be a positive {what} in mm, got {value}")
+    if not (0 < args.tol < 1):
+        raise CommandError(f"--tol is a fraction of the target's length, 0 < tol < 1 "
+                           f"(0.01 = 1 %), got {args.tol}")
     if args.bed is not None and not args.bed > 0:
-        raise ValueError(f"--bed must be a positive length in mm, got {args.bed}")
+        raise CommandError(f"--bed must be a positive length in mm, got {args.bed}")
+    if args.max_units < 1:
+        raise CommandError(f"--max-units must be >= 1, got {args.max_units}")
+    if not (args.min_barrier >= 0 and math.isfinite(args.min_barrier)):
+        raise CommandError(f"--min-barrier must be >= 0 (E I_arch / L), got {args.min_barrier}")
+    L_range = _pair_mm(args.L_range, "--L-range (mm)", 1e-3)
+    hL_range = _pair_mm(args.hL_range, "--hL-range", 1.0)
     colours = _colours(args.colours)
     controls = None
     if args.controls:
         try:
             controls = np.array([float(v) for v in args.controls.split(",") if v.strip()]) * 1e-3
         except ValueError:
-            raise ValueError(f"--controls must be comma-separated numbers (mm), "
-                             f"got {args.controls!r}") from None
+            raise CommandError(f"--controls must be comma-separated numbers (mm), "
+                               f"got {args.controls!r}") from None
     if not Path(args.target).is_file():
-        raise ValueError(f"target file not found: {args.target}")
+        raise CommandError(f"target file not found: {args.target}")
+    from snapmorph.commands._common import output_dir
+
+    output_dir(args.out)
+
+    from design import inverse_design
+    from design.lookup import load_map
+
     dm = load_map(args.map)
-    d = inverse_design(args.target, t=args.t * 1e-3, w=args.w * 1e-3, controls=controls,
-                       design_map=dm, tol=args.tol / 100.0, max_controls=args.max_controls,
-                       min_turn_deg=args.min_turn, refine=args.refine)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the summary says it all, once
+        d = inverse_design(args.target, t=args.t * 1e-3, w=args.w * 1e-3, controls=controls,
+                           design_map=dm, tol=args.tol, max_controls=args.max_controls,
+                           min_turn_deg=args.min_turn, refine=args.refine or None,
+                           placement=args.placement, L_range=L_range, hL_range=hL_range,
+                           min_barrier=args.min_barrier, state=args.state,
+                           max_units=args.max_units, theta_convention=args.theta_convention,
+                           verify=not args.no_verify)
     try:
         written = d.write(args.out, bed_length_mm=args.bed, colours=colours,
                           drawings=not args.no_drawings)
     except OSError as exc:
-        raise ValueError(f"cannot write into {args.out}: {exc}") from None
+        raise CommandError(f"cannot write into {args.out}: {exc}") from None
     print(d.summary())
     print("wrote " + ", ".join(str(p) for p in written))
-    return 0
+    return 0 if d.met else 1
 
 
 def _colours(text):
+    from snapmorph.cli import CommandError
+
     if not text:
         return None
     out = {}
@@ -85,10 +149,10 @@ def _colours(text):
         name, _, value = item.partition("=")
         name = name.strip().upper()
         if name not in ("CUT", "ENGRAVE", "MARKS") or not value.strip().isdigit():
-            raise ValueError(f"--colours: expected LAYER=INDEX for CUT, ENGRAVE, MARKS "
-                             f"(AutoCAD colour index 1-255), got {item!r}")
+            raise CommandError(f"--colours: expected LAYER=INDEX for CUT, ENGRAVE, MARKS "
+                               f"(AutoCAD colour index 1-255), got {item!r}")
         index = int(value)
         if not 1 <= index <= 255:
-            raise ValueError(f"--colours: colour index must be 1-255, got {index}")
+            raise CommandError(f"--colours: colour index must be 1-255, got {index}")
         out[name] = index
     return out

@@ -1,4 +1,4 @@
-"""`snapmorph figures`: reproduce the paper's figures into a folder."""
+"""`snapmorph figures`: reproduce the paper's figures into a folder, with a gallery page."""
 
 from __future__ import annotations
 
@@ -8,22 +8,38 @@ FIGURES = ("specimens", "maps", "fk", "inverse", "arrays")
 
 
 def add_parser(sub):
-    p = sub.add_parser("figures", help="write the paper's figures (PNG) and tables (Markdown)")
+    p = sub.add_parser("figures", help="write the paper's figures (PNG), tables (Markdown) and "
+                                       "a gallery page index.md")
     p.add_argument("--out", default="figures", help="output folder (default figures/)")
     p.add_argument("--only", nargs="*", choices=FIGURES, help="make only these figures")
-    p.add_argument("--map", default=None, help="design map file for the map figures (default: the committed map)")
+    p.add_argument("--map", default=None,
+                   help="design map file for the map figures (default: the committed map)")
     p.set_defaults(run=run)
     return p
 
 
 def run(args: argparse.Namespace) -> int:
     import importlib
-    import os
+    from pathlib import Path
 
-    os.makedirs(args.out, exist_ok=True)
+    from snapmorph.commands._common import input_file, output_dir
+
+    if args.map:
+        input_file(args.map, "--map")
+    out = output_dir(args.out, "--out")
     wanted = args.only or FIGURES
-    for name in wanted:
+    from tqdm import tqdm
+
+    written = []
+    bar = tqdm(wanted, desc="figures", unit="group", leave=False)
+    for name in bar:
+        bar.set_postfix_str(name)
         module = importlib.import_module(f"snapmorph.figures_{name}")
-        for path in module.make(args.out, args):
-            print(f"wrote {path}")
+        for path in module.make(str(out), args):
+            tqdm.write(f"wrote {path}")
+            written.append(Path(path))
+    bar.close()
+    from snapmorph.figures_gallery import write_gallery
+
+    print(f"wrote {write_gallery(out)}")
     return 0

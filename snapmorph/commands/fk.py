@@ -5,16 +5,25 @@ from __future__ import annotations
 import argparse
 
 HELP = "shape of an array of units in a snapping state (forward kinematics)"
+EPILOG = """Frame: when units.csv starts with a '# placement' line (written by `snapmorph
+design`), shapes, printed joints and --csv are in the target's frame (where the design put unit
+1); otherwise unit 1 starts at (0, 0) heading +x. --overlay draws a target CSV (x_mm, y_mm[,
+tangent_deg]) in the same frame and prints the largest distance from its points to the base."""
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = subparsers.add_parser("fk", help=HELP, description=HELP + ".")
+    p = subparsers.add_parser("fk", help=HELP, description=HELP + ".", epilog=EPILOG)
     p.add_argument("--units", required=True, help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
     p.add_argument("--state", default=None,
-                   help="one character per unit, '1' = snapped, e.g. 101 (default: all snapped)")
+                   help="one character per unit, '1' = snapped, '0' for spacers, e.g. 101 "
+                        "(default: every arched unit snapped)")
     p.add_argument("--all", action="store_true", help="every state (2^n), plotted in one figure")
     p.add_argument("--plot", default=None, help="write a figure (PNG/PDF/SVG)")
     p.add_argument("--csv", default=None, help="write the base polyline (mm) of --state")
+    p.add_argument("--overlay", default=None, metavar="TARGET_CSV",
+                   help="draw this target (x_mm, y_mm) over the shapes, same frame")
+    p.add_argument("--no-placement", action="store_true",
+                   help="ignore units.csv's placement line: start at (0, 0) heading +x")
     p.add_argument("--source", choices=("map", "simulate"), default="map",
                    help="unit shapes from the design map or a direct simulation "
                         "(default %(default)s)")
@@ -23,43 +32,125 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
+MAX_ALL = 10  # --all: at most 2^10 states
+
+
+def _check_all(units, most, option):
+    from snapmorph.commands._common import CommandError
+
+    n = sum(not u.is_spacer for u in units)
+    if n > most:
+        raise CommandError(f"{option} would draw 2^{n} states ({2 ** n}); it takes at most "
+                           f"{most} arched units (give one --state instead)")
+
+
+def check_state(text, units, option="--state"):
+    """Booleans for a '0'/'1' state string of `units`; None gives every arched unit snapped.
+    A '1' on a spacer (h = 0) is refused: a spacer has one state only."""
+    from snapmorph.commands._common import CommandError
+
+    n = len(units)
+    if text is None:
+        return [not u.is_spacer for u in units]
+    s = text.strip()
+    if len(s) != n or any(ch not in "01" for ch in s):
+        raise CommandError(f"{option} must be {n} characters 0/1, one per unit in units.csv "
+                           f"(1 = snapped); got {text!r}")
+    bad = [i + 1 for i, (ch, u) in enumerate(zip(s, units)) if ch == "1" and u.is_spacer]
+    if bad:
+        raise CommandError(f"{option} {text}: unit(s) {', '.join(map(str, bad))} are spacers "
+                           f"(h_mm = 0, side = 0) with one state only; put 0 there")
+    return [ch == "1" for ch in s]
+
+
+def load_units(args):
+    """(units, placement or None) from --units; the target from --overlay (m) or None."""
+    from design.targets import read_target_csv
+    from design.units import read_placement, read_units_csv
+    from snapmorph.commands._common import input_file
+
+    path = input_file(args.units, "--units")
+    b_over_L = getattr(args, "_b_over_L", 0.0)
+    units = read_units_csv(path, b_over_L=b_over_L)
+    placement = None if args.no_placement else read_placement(path)
+    target = None
+    if args.overlay:
+        target, _ = read_target_csv(input_file(args.overlay, "--overlay"))
+    return units, placement, target
+
+
 def run(args) -> int:
     import math
 
+    from snapmorph.commands._common import input_file, output_file, plot_file
+
+    # Paths first: nothing long runs before a bad path is refused.
+    input_file(args.units, "--units")
+    if args.map:
+        input_file(args.map, "--map")
+    if args.overlay:
+        input_file(args.overlay, "--overlay")
+    plot_file(args.plot, "--plot")
+    output_file(args.csv, "--csv")
+    if args.all and (args.state or args.csv):
+        from snapmorph.commands._common import CommandError
+
+        raise CommandError("--state and --csv apply to one state, not with --all")
+
     import numpy as np
 
-    from design import all_states, chain, parse_state, read_units_csv
+    from design import all_states, chain
     from design.lookup import MapLookup, load_map
+    from design.targets import distances_to_polyline
+    from snapmorph.plotting.arrays import plot_fk_state, plot_fk_states
 
+    # Read and check the files and the state before loading the map (the slow part).
+    units, placement, target = load_units(args)
+    if not args.all:
+        check_state(args.state, units)
+    else:
+        _check_all(units, MAX_ALL, "--all")
     lookup = MapLookup(load_map(args.map)) if args.source == "map" else None
-    units = read_units_csv(args.units, b_over_L=lookup.b_over_L if lookup else 0.0)
+    if lookup is not None and lookup.b_over_L:
+        args._b_over_L = lookup.b_over_L
+        units, placement, target = load_units(args)
+    start, start_angle = ((placement[0], placement[1]), placement[2]) if placement else \
+        ((0.0, 0.0), 0.0)
+    frame = ("target's frame (units.csv placement: start "
+             f"({start[0] * 1e3:.2f}, {start[1] * 1e3:.2f}) mm, "
+             f"{math.degrees(start_angle):.2f} deg)") if placement else \
+        "array frame (unit 1 starts at (0, 0) heading +x)"
     if args.all:
         states = all_states(units, source=args.source,
-                            design_map=lookup.dm if lookup else None, chains=True)
-        print(f"{len(units)} units, {len(states)} states; end point and end direction:")
+                            design_map=lookup.dm if lookup else None, chains=True,
+                            start=start, start_angle=start_angle)
+        print(f"{len(units)} units, {len(states)} states, {frame}; end point and end direction:")
         for key, c in states.items():
             print(f"  {key}: ({c.xy[-1, 0] * 1e3:8.1f}, {c.xy[-1, 1] * 1e3:8.1f}) mm, "
                   f"{math.degrees(c.angles[-1]):7.1f} deg")
         if args.plot:
-            from design.plots import plot_states
-
-            figure = plot_states({k: c.xy for k, c in states.items()}, args.plot,
-                                 title=str(args.units))
+            figure = plot_fk_states({k: c.xy for k, c in states.items()}, args.plot,
+                                    title=str(args.units), target=target, placement=placement)
             print(f"wrote {figure}")
         return 0
-    snapped = parse_state(args.state, len(units))
+    snapped = check_state(args.state, units)
     key = "".join("1" if s else "0" for s in snapped)
-    ch = chain(units, snapped, source=args.source, lookup=lookup)
-    print(f"state {key}: {len(units)} units")
+    ch = chain(units, snapped, source=args.source, lookup=lookup, start=start,
+               start_angle=start_angle)
+    print(f"state {key}: {len(units)} units, {frame}")
     print(f"{'joint':>5} {'x_mm':>9} {'y_mm':>9} {'dir_deg':>8}")
     for i, (p, a) in enumerate(zip(ch.joints, ch.angles)):
         print(f"{i:>5} {p[0] * 1e3:9.2f} {p[1] * 1e3:9.2f} {math.degrees(a):8.2f}")
+    if target is not None:
+        dist = distances_to_polyline(target, ch.xy)
+        print(f"overlay {args.overlay}: {len(target)} target points, largest distance to the "
+              f"base {dist.max() * 1e3:.2f} mm (point {int(dist.argmax()) + 1})")
     if args.csv:
         np.savetxt(args.csv, ch.xy * 1e3, delimiter=",", fmt="%.4f", header="x_mm,y_mm",
                    comments="")
         print(f"wrote {args.csv}")
     if args.plot:
-        from design.plots import plot_state
-
-        print(f"wrote {plot_state(ch.xy, args.plot, units, ch.joints, title=f'state {key}')}")
+        figure = plot_fk_state(ch.xy, ch.joints, args.plot, title=f"state {key}: {args.units}",
+                               target=target, placement=placement)
+        print(f"wrote {figure}")
     return 0

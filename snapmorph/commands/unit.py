@@ -4,21 +4,39 @@ from __future__ import annotations
 
 import argparse
 
+from snapmorph.commands._common import integer, length_mm, number
+
 HELP = """Simulate one bistable unit: push its apex down until it snaps, and report F_cr,
-the equilibrium displacements, S, theta and the energies. Lengths on the command line are in
-millimetres; E is in pascals. (The Python API, solver.unit, is SI throughout.)"""
+the equilibrium displacements, S, theta (actuated and released) and the energies. Lengths on
+the command line are in millimetres; E is in pascals. (The Python API, units.planar /
+solver.unit, is SI throughout.)"""
 
 
 def add_parser(sub):
     p = sub.add_parser("unit", help="simulate one unit (lengths in mm)", description=HELP)
-    p.add_argument("--L", type=float, required=True, help="base length, mm")
-    p.add_argument("--h", type=float, required=True, help="arch apex height, mm (0 = arch-less)")
-    p.add_argument("--t", type=float, required=True, help="sheet thickness, mm")
-    p.add_argument("--w", type=float, required=True, help="strip width, mm")
-    p.add_argument("--b", type=float, default=0.0, help="extra flat length of the arch ends, mm (default 0; the paper's specimens use b = w)")
-    p.add_argument("--E", type=float, default=2.2e9, help="Young's modulus, Pa (default 2.2e9, PETG)")
-    p.add_argument("--nodes", type=int, default=None, help="resolution: about the number of base nodes (default: converged default)")
-    p.add_argument("--method", choices=("mgdc", "displacement"), default="mgdc", help="path follower (default mgdc)")
+    p.add_argument("--L", type=length_mm(what="base length"), required=True, help="base length, mm")
+    p.add_argument("--h", type=length_mm(0, low_inclusive=True, what="arch apex height"),
+                   required=True, help="arch apex height, mm (0 = arch-less)")
+    p.add_argument("--t", type=length_mm(what="sheet thickness"), required=True,
+                   help="sheet thickness, mm")
+    p.add_argument("--w", type=length_mm(what="strip width"), required=True, help="strip width, mm")
+    p.add_argument("--b", type=length_mm(0, low_inclusive=True, what="extra flat length"),
+                   default=0.0, help="extra flat length of the arch ends, mm (default 0; the "
+                   "paper's specimens use b = w)")
+    p.add_argument("--E", type=number("Pa", 0, what="Young's modulus"), default=2.2e9,
+                   help="Young's modulus, Pa (default 2.2e9, PETG)")
+    p.add_argument("--joint-length", type=length_mm(0, low_inclusive=True,
+                                                    what="arch length held by the actuator"),
+                   default=3.175, help="length of arch held straight by the actuator stem, mm "
+                   "(default 3.175 = 1/8 in; 0 = a point clamp at the apex)")
+    p.add_argument("--bond-length", type=length_mm(what="glued length at each end"), default=None,
+                   help="glued length at each end, mm (default: the whole flat part b + w)")
+    p.add_argument("--nodes", type=integer(11, 20001, what="mesh resolution"), default=None,
+                   help="resolution: about the number of base nodes (default: converged default)")
+    p.add_argument("--method", choices=("mgdc", "displacement"), default="mgdc",
+                   help="path follower (default mgdc)")
+    p.add_argument("--time-limit", type=number("s", 0, what="wall-time limit"), default=None,
+                   help="stop after this many seconds with status timeout (default: no limit)")
     p.add_argument("--plot", metavar="PNG", help="write the force-displacement curve and the shapes (i)-(iii)")
     p.add_argument("--json", metavar="FILE", help="write the metrics and the curve as JSON")
     p.set_defaults(run=run)
@@ -39,13 +57,28 @@ def run(args: argparse.Namespace) -> int:
     import json
     import math
 
-    from solver.unit import UnitGeometry, simulate_unit
+    from snapmorph.cli import CommandError
+    from snapmorph.commands._common import output_file, plot_file
+    from units.geometry import geometry_problem
 
     mm = 1e-3
-    g = UnitGeometry(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm, b=args.b * mm, E=args.E)
-    if args.nodes is not None and args.nodes < 11:
-        raise ValueError(f"--nodes must be >= 11; got {args.nodes}")
-    r = simulate_unit(g, nodes=args.nodes, method=args.method)
+    dims = dict(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm, b=args.b * mm,
+                E=args.E, joint_length=args.joint_length * mm,
+                bond_length=None if args.bond_length is None else args.bond_length * mm)
+    # the model's valid domain, checked here so that the message quotes millimetres
+    problem = geometry_problem(**dims, unit="mm", scale=1e3)
+    if problem:
+        raise CommandError(problem.replace("joint_length", "--joint-length")
+                           .replace("bond_length", "--bond-length"))
+    json_path = output_file(args.json, "--json") if args.json else None
+    plot_path = plot_file(args.plot, "--plot") if args.plot else None
+
+    from units.geometry import UnitGeometry
+    from units.planar import simulate_unit
+
+    g = UnitGeometry(**dims)
+    r = simulate_unit(g, nodes=args.nodes, method=args.method, time_limit=args.time_limit)
+    rel = r.released or {}
     rows = [
         ("status", r.status, ""),
         ("bistable", _fmt(r.bistable), ""),
@@ -56,25 +89,35 @@ def run(args: argparse.Namespace) -> int:
         ("S", _fmt(r.S, 1e3), "mm"),
         ("S/L", _fmt(r.S / g.L if r.S == r.S else math.nan), ""),
         ("theta", _fmt(r.theta_deg), "deg"),
+        ("theta_end", _fmt(r.theta_end_deg), "deg"),
+        ("self-standing", _fmt(r.self_standing), ""),
+        ("S released", _fmt(rel.get("S", math.nan), 1e3), "mm"),
+        ("theta released", _fmt(rel.get("theta_deg", math.nan)), "deg"),
         ("energy barrier", _fmt(r.energy_barrier, 1e3), "mJ"),
         ("energy stored (iii)", _fmt(r.energy_stored, 1e3), "mJ"),
-        ("self-standing", _fmt(r.self_standing), ""),
         ("nodes", str(r.n_nodes), ""),
         ("solve time", _fmt(r.solve_time, 1e3, 3), "ms"),
     ]
-    print(f"unit L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm, E={args.E:g} Pa")
+    print(f"unit L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm, E={args.E:g} Pa, "
+          f"joint {args.joint_length:g} mm, bond "
+          + ("b + w" if args.bond_length is None else f"{args.bond_length:g} mm"))
     for name, value, unit in rows:
         print(f"  {name:<20} {value:>12} {unit}")
-    if args.json:
+    if r.reason and not r.bistable:
+        print(f"  not bistable: {r.reason}")
+    if json_path:
         payload = {k: (None if isinstance(v, float) and v != v else v) for k, v in r.summary().items()}
-        payload["geometry_m"] = {k: getattr(g, k) for k in ("L", "h", "t", "w", "b", "E")}
+        payload["geometry_m"] = {k: getattr(g, k) for k in ("L", "h", "t", "w", "b", "E",
+                                                             "joint_length", "bond_length")}
         payload["curve"] = {"d_m": r.curve[0].tolist(), "F_N": r.curve[1].tolist()}
-        with open(args.json, "w") as fh:
+        with open(json_path, "w") as fh:
             json.dump(payload, fh, indent=1)
-        print(f"wrote {args.json}")
-    if args.plot:
+        print(f"wrote {json_path}")
+    if plot_path:
         from snapmorph.plotting.unit import plot_unit
 
-        plot_unit(r, args.plot)
-        print(f"wrote {args.plot}")
-    return 0 if r.status in ("ok", "monostable") else 1
+        plot_unit(r, str(plot_path))
+        print(f"wrote {plot_path}")
+    if r.status.startswith("timeout"):
+        raise CommandError(f"{r.status} (--time-limit {args.time_limit:g} s)")
+    return 0 if r.status_code in (0, 1, 5) else 1

@@ -50,23 +50,39 @@ def specimen_table(results) -> str:
     return "\n".join(lines)
 
 
+THICKNESS_COLOUR = {0.50: "#000000", 0.75: "#0072B2"}  # Okabe-Ito black and blue
+
+
 def plot_specimens(nominal, average, path):
-    """Curves (top) by arch height, both thicknesses, nominal dashed; shapes (bottom)."""
-    fig, axes = plt.subplots(2, 3, figsize=(15, 8), gridspec_kw={"height_ratios": [1.2, 1]})
+    """Curves (top) by arch height, both thicknesses, nominal dashed; shapes (bottom), true
+    aspect ratio, axes in mm."""
+    from snapmorph.plotting.unit import shape_legend_handles, state_legend_handles
+
+    fig, axes = plt.subplots(2, 3, figsize=(15, 8.6), gridspec_kw={"height_ratios": [1.2, 1]},
+                             constrained_layout=True)
     for col, hn in enumerate((10, 20, 40)):
         ax = axes[0, col]
-        for t, color in ((0.50, "C0"), (0.75, "C3")):
-            draw_curve(ax, average[hn, t], label=f"t = {t} mm (measured avg)", color=color)
-            draw_curve(ax, nominal[hn, t], label=f"t = {t} mm (nominal)", color=color,
+        for t, color in THICKNESS_COLOUR.items():
+            draw_curve(ax, average[hn, t], label=f"t = {t} mm, measured average", color=color)
+            draw_curve(ax, nominal[hn, t], label=f"t = {t} mm, nominal", color=color,
                        mark=False, ls="--", lw=0.9)
-        ax.set_title(f"h = {hn} mm (states (i) red, (ii) orange, (iii) green)")
-        ax.legend(fontsize=7)
+        ax.set_title(f"h = {hn} mm: force against apex displacement", fontsize=10)
+        handles, _ = ax.get_legend_handles_labels()
+        ax.legend(handles=handles + state_legend_handles(), fontsize=7, loc="upper right")
         sh = axes[1, col]
+        offset = -2.2 * hn
         draw_shapes(sh, average[hn, 0.50])
-        draw_shapes(sh, average[hn, 0.75], offset=-2.2 * hn)
-        sh.set_title(f"h = {hn} mm: shapes, t = 0.5 (top) and 0.75 mm (bottom)")
-    axes[1, 0].legend(fontsize=6, loc="lower left")
-    fig.tight_layout()
+        draw_shapes(sh, average[hn, 0.75], offset=offset)
+        for t, y in ((0.50, 0.0), (0.75, offset)):
+            sh.annotate(f"t = {t} mm", (0.0, y), xytext=(-4, 0), textcoords="offset points",
+                        ha="right", va="center", fontsize=8)
+        sh.set_title(f"h = {hn} mm: shapes at (i)-(iii), measured average", fontsize=10)
+    for a in axes[1]:
+        a.set_aspect("equal", adjustable="datalim")  # true shapes; the axes are the mm scale
+    axes[1, 2].legend(handles=shape_legend_handles(), fontsize=7, loc="upper left",
+                      bbox_to_anchor=(1.01, 1.0))
+    fig.suptitle("Table 1 specimens (w = b = 5 mm): solid measured-average sizes, dashed nominal",
+                 fontsize=11)
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path

@@ -2,8 +2,9 @@
 
 θ rises linearly with h/L from the bistability boundary (h/L = 0.09: monostable below) and
 weakly with t/L and w/L; the snapped base is a circular arc of turning θ and length
-1 - 0.2 (h/L)² (per unit length), so S/L is its chord. The file follows
-docs/design-map-schema.md and loads through `maps.DesignMap`.
+1 - 0.2 (h/L)² (per unit length), so S/L is its chord. The released state (schema 2) is the
+same as the actuated one here (every bistable point self-standing), θ_end = θ / 2. The file
+follows docs/design-map-schema.md and loads through `maps.DesignMap`.
 """
 
 from __future__ import annotations
@@ -67,17 +68,23 @@ def make_dataset():
             "energy_barrier": (dims, np.where(status == 0, hh * hh, np.nan), {"units": "1", "long_name": "energy barrier"}),
             "energy_stored": (dims, np.where(status == 0, 0.5 * hh * hh, np.nan), {"units": "1", "long_name": "energy stored"}),
             "bistable": (dims, (status == 0).astype("i1"), {"units": "1", "long_name": "bistable"}),
-            "self_standing": (dims, np.full(shape3, -1, dtype="i1"), {"units": "1", "long_name": "self standing"}),
+            "self_standing": (dims, np.where(status == 0, 1, -1).astype("i1"), {"units": "1", "long_name": "self standing"}),
+            "theta_end": (dims, theta / 2, {"units": "degree", "long_name": "end angle, theta / 2"}),
+            "S_released": (dims, S, {"units": "1", "long_name": "S / L released"}),
+            "theta_released": (dims, theta, {"units": "degree", "long_name": "theta released"}),
+            "theta_end_released": (dims, theta / 2, {"units": "degree", "long_name": "theta_end released"}),
+            "base_shape_released": (dims + ("sample", "xz"), base, {"units": "1", "long_name": "released base / L"}),
             "bifurcation": (dims, np.full(shape3, -1, dtype="i1"), {"units": "1", "long_name": "bifurcation"}),
             "status": (dims, status, {"units": "1", "long_name": "status",
-                                      "flag_values": np.array([-1, 0, 1, 2, 3], dtype="i1"),
-                                      "flag_meanings": "pending ok monostable not_converged invalid_geometry"}),
+                                      "flag_values": np.array([-1, 0, 1, 2, 3, 4, 5], dtype="i1"),
+                                      "flag_meanings": "pending ok monostable not_converged invalid_geometry "
+                                                       "timeout second_state_unstable"}),
             "base_shape": (dims + ("sample", "xz"), base, {"units": "1", "long_name": "base centreline in state (iii) / L"}),
             "solve_time": (dims, np.zeros(shape3), {"units": "s", "long_name": "solve time"}),
         },
         coords={"h_over_L": H, "t_over_L": T, "w_over_L": W, "sample": np.arange(M),
                 "xz": np.array(["x", "z"])},
-        attrs={"schema_version": 1, "b_over_L": 0.0, "resolution": 0, "package_version": "test",
+        attrs={"schema_version": 2, "b_over_L": 0.0, "resolution": 0, "package_version": "test",
                "git_commit": "synthetic", "created": "2026-01-01T00:00:00Z",
                "normalisation": "F_norm = F L^2 / (E I_arch), I_arch = w t^3 / 12",
                "E_reference": 2.2e9, "title": "synthetic design map for design/ tests"},

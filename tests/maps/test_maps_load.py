@@ -12,7 +12,8 @@ from pipeline.dataset import write_netcdf
 def test_load_reads_a_map(dm, synthetic_path):
     assert dm.path == synthetic_path
     assert dm.ranges == {"h_over_L": (0.05, 0.5), "t_over_L": (0.0025, 0.01), "w_over_L": (0.02, 0.08)}
-    assert dm.samples == 17 and dm.attrs["schema_version"] == 1
+    assert dm.samples == 17 and dm.attrs["schema_version"] == 2
+    assert dm.states == ("released", "actuated")
     assert "synthetic.nc" in repr(dm)
 
 
@@ -57,8 +58,8 @@ def test_corrupt_files(tmp_path, synthetic_path):
 
 def test_wrong_schema_versions(tmp_path):
     ds = synthetic_dataset()
-    ds.attrs["schema_version"] = np.int32(2)
-    _expect(_write(tmp_path, ds, "v2.nc"), "schema version 2 is newer than this snapmorph reads")
+    ds.attrs["schema_version"] = np.int32(3)
+    _expect(_write(tmp_path, ds, "v3.nc"), "schema version 3 is newer than this snapmorph reads")
     ds.attrs["schema_version"] = np.int32(0)
     _expect(_write(tmp_path, ds, "v0.nc"), "schema version 0 is not supported")
     del ds.attrs["schema_version"]
@@ -87,3 +88,23 @@ def test_wrong_dimensions(tmp_path):
     ds = synthetic_dataset()
     ds["theta"] = ds["theta"].transpose("w_over_L", "t_over_L", "h_over_L")
     _expect(_write(tmp_path, ds, "transposed.nc"), "variable theta has dimensions")
+
+
+def test_schema_1_maps_load_with_a_warning_and_answer_only_the_actuated_state(tmp_path):
+    from maps import MapDomainError, OldSchemaWarning
+    from pipeline.schema import OPTIONAL_VARS
+
+    ds = synthetic_dataset().drop_vars([*OPTIONAL_VARS, "base_shape_released"])
+    ds.attrs["schema_version"] = np.int32(1)
+    path = _write(tmp_path, ds, "v1.nc")
+    with pytest.warns(OldSchemaWarning, match="schema version 1: it holds no released state"):
+        dm = DesignMap.load(path)
+    assert dm.states == ("actuated",)
+    assert np.isfinite(dm.at(0.4, 0.005, 0.05, state="actuated")["theta"])
+    with pytest.raises(MapDomainError, match=r"has no released state; rebuild it \(`make maps`\)"):
+        dm.at(0.4, 0.005, 0.05)
+    with pytest.raises(MapDomainError, match="no variable 'theta_end'"):
+        dm.value("theta_end", 0.4, 0.005, 0.05, state="actuated")
+    # a schema-2 file without the released variables is refused
+    ds = synthetic_dataset().drop_vars("S_released")
+    _expect(_write(tmp_path, ds, "noSrel.nc"), r"missing variables \['S_released'\]")

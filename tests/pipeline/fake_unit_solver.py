@@ -7,7 +7,9 @@ Behaviour (all dimensionless):
 - else bistable with smooth analytic fields.
 Environment: FAKE_SOLVER_LOG=path appends "h t w" per call (one line, flushed);
 FAKE_SOLVER_DELAY=seconds sleeps per call; FAKE_SOLVER_CRASH="h t w" kills the process
-(os._exit) at that point, like a segfaulting solver.
+(os._exit) at that point, like a segfaulting solver; FAKE_SOLVER_HANG="h t w" never returns at
+that point (ignores its time limit); FAKE_SOLVER_SLOW="h t w" works until its time limit at that
+point and then reports status 4 (timeout), as a solver that honours `time_limit` does.
 """
 
 import math
@@ -47,7 +49,7 @@ def _near(a, b):
     return all(abs(x - y) < 1e-12 for x, y in zip(a, b))
 
 
-def solve(h, t, w, b, resolution, samples):
+def solve(h, t, w, b, resolution, samples, time_limit=None):
     log = os.environ.get("FAKE_SOLVER_LOG")
     if log:
         with open(log, "a") as f:
@@ -59,6 +61,17 @@ def solve(h, t, w, b, resolution, samples):
     crash = os.environ.get("FAKE_SOLVER_CRASH")
     if crash and _near((h, t, w), tuple(map(float, crash.split()))):
         os._exit(13)
+    hang = os.environ.get("FAKE_SOLVER_HANG")
+    if hang and _near((h, t, w), tuple(map(float, hang.split()))):
+        while True:  # a solver stuck in a loop that never looks at the clock
+            time.sleep(0.05)
+    slow = os.environ.get("FAKE_SOLVER_SLOW")
+    if slow and _near((h, t, w), tuple(map(float, slow.split()))):
+        time.sleep(time_limit if time_limit is not None else 3600.0)
+        rec = {k: math.nan for k in fields(h, t, w)}
+        rec.update(status=4, bistable=0, self_standing=-1, bifurcation=-1,
+                   base_shape=np.full((samples, 2), math.nan), message=f"time limit {time_limit!r} s reached")
+        return rec
     if _near((h, t, w), RAISING_POINT):
         raise RuntimeError("fake solver exploded")
     nan = math.nan
@@ -76,3 +89,8 @@ def solve(h, t, w, b, resolution, samples):
     rec.update(status=0, bistable=1, self_standing=1 if h > 0.25 else 0, bifurcation=0,
                base_shape=shape(h, t, w, samples), message="ok")
     return rec
+
+
+def refuse_map(path):
+    """A map reader that refuses every file (tests that nothing is deleted before the check)."""
+    raise ValueError(f"map {path} refused by the reader")

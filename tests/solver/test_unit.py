@@ -21,14 +21,14 @@ def specimen():
 @pytest.mark.parametrize(
     "kwargs,match",
     [
-        (dict(L=-0.1), "L must be > 0"),
-        (dict(t=0.0), "t must be > 0"),
-        (dict(w=np.nan), "w must be finite"),
-        (dict(h=-0.01), "h must be >= 0"),
+        (dict(L=-0.1), r"L \(base length, m\) must be > 0"),
+        (dict(t=0.0), r"t \(sheet thickness, m\) must be > 0"),
+        (dict(w=np.nan), r"w \(strip width, m\) must be finite"),
+        (dict(h=-0.01), r"h \(arch apex height, m\) must be >= 0"),
         (dict(b=0.046), "b \\+ w must be < L/2"),
         (dict(h=0.5), "h must be <= the sinusoid's span"),
-        (dict(E=0), "E must be > 0"),
-        (dict(t="thin"), "t must be a number"),
+        (dict(E=0), r"E \(Young's modulus, Pa\) must be > 0"),
+        (dict(t="thin"), r"t \(sheet thickness, m\) must be a real number"),
     ],
 )
 def test_geometry_that_cannot_be_built_is_rejected(kwargs, match):

@@ -1,0 +1,206 @@
+"""Helpers every `snapmorph` command uses: typed options that fail in the user's units, and one
+rule for the files a command reads and writes.
+
+Numbers typed on the command line are checked by argparse `type=` callables built here, so a bad
+value ends at parse time with one line such as
+
+    snapmorph unit: error: argument --t: must be > 0 mm (sheet thickness); got '-1'
+
+The output rule, applied by every command BEFORE any long computation:
+
+- missing parent folders are created;
+- a path that runs through a file, names an existing folder (for a file) or cannot be written
+  is refused with one line (`CommandError`, exit 2).
+
+Only argparse is imported at module level (``snapmorph --help`` stays fast).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+from pathlib import Path
+
+from snapmorph.cli import CommandError
+
+__all__ = [
+    "CommandError",
+    "PLOT_SUFFIXES",
+    "input_file",
+    "integer",
+    "length_mm",
+    "number",
+    "output_dir",
+    "output_file",
+    "plot_file",
+]
+
+# File types matplotlib's Agg/PDF/SVG/PS backends write.
+PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff", ".webp")
+
+
+def _range_text(unit: str, low, high, low_inclusive: bool, high_inclusive: bool) -> str:
+    u = f" {unit}" if unit else ""
+    if low is not None and high is not None:
+        lb = "[" if low_inclusive else "("
+        hb = "]" if high_inclusive else ")"
+        return f"in {lb}{low:g}, {high:g}{hb}{u}"
+    if low is not None:
+        return f"{'>=' if low_inclusive else '>'} {low:g}{u}"
+    if high is not None:
+        return f"{'<=' if high_inclusive else '<'} {high:g}{u}"
+    return f"a finite number{(' in' + u) if unit else ''}"
+
+
+def number(unit: str = "", low=None, high=None, *, low_inclusive: bool = False,
+           high_inclusive: bool = True, what: str = ""):
+    """An argparse ``type=`` for a finite float in [low, high] (bounds optional), in `unit`.
+
+    argparse prefixes the option name ("argument --t: ..."), so the message names the option,
+    its unit and the valid range, and repeats what the user typed.
+    """
+    rng = _range_text(unit, low, high, low_inclusive, high_inclusive)
+    note = f" ({what})" if what else ""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except (TypeError, ValueError):
+            raise argparse.ArgumentTypeError(
+                f"must be a number {rng}{note}; got {text!r}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"must be finite, {rng}{note}; got {text!r}")
+        bad = ((low is not None and (value < low or (value == low and not low_inclusive)))
+               or (high is not None and (value > high or (value == high and not high_inclusive))))
+        if bad:
+            raise argparse.ArgumentTypeError(f"must be {rng}{note}; got {text!r}")
+        return value
+
+    parse.__name__ = f"number_{unit or 'dimensionless'}"  # argparse shows it on odd errors
+    return parse
+
+
+def length_mm(low=0.0, high=None, *, low_inclusive: bool = False, high_inclusive: bool = True,
+              what: str = ""):
+    """An argparse ``type=`` for a length typed in millimetres (returned in mm, not m).
+
+    Default: strictly positive. ``length_mm(0, low_inclusive=True)`` allows zero."""
+    return number("mm", low, high, low_inclusive=low_inclusive, high_inclusive=high_inclusive,
+                  what=what)
+
+
+def integer(low=None, high=None, *, what: str = ""):
+    """An argparse ``type=`` for an integer in [low, high] (both inclusive, optional)."""
+    rng = _range_text("", low, high, True, True).replace("a finite number", "an integer")
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except (TypeError, ValueError):
+            raise argparse.ArgumentTypeError(
+                f"must be an integer {rng}{(' (' + what + ')') if what else ''}; "
+                f"got {text!r}") from None
+        if (low is not None and value < low) or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(
+                f"must be an integer {rng}{(' (' + what + ')') if what else ''}; got {text!r}")
+        return value
+
+    parse.__name__ = "integer"
+    return parse
+
+
+def _check_parent(path: Path, option: str) -> None:
+    """Create the missing folders above `path`; refuse a parent that is a file."""
+    parent = path.parent
+    # Walk up to the first existing ancestor: it must be a folder.
+    probe = parent
+    while not probe.exists():
+        if probe == probe.parent:
+            break
+        probe = probe.parent
+    if probe.exists() and not probe.is_dir():
+        raise CommandError(f"{option} {path}: {probe} is a file, not a folder")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CommandError(f"{option} {path}: cannot create the folder {parent} "
+                           f"({exc.strerror or exc})") from None
+
+
+def output_file(path, option: str = "output") -> Path:
+    """Check that a file can be written at `path` (creating its parent folders); return it.
+
+    Call before any long computation. The probe opens the file for appending and removes it
+    again if it did not exist, so it works for root too (where `os.access` always says yes)."""
+    if path is None:
+        return None
+    path = Path(os.path.expanduser(str(path)))
+    if str(path) in ("", "."):
+        raise CommandError(f"{option}: empty file name")
+    if path.is_dir():
+        raise CommandError(f"{option} {path}: is a folder; give a file name")
+    _check_parent(path, option)
+    existed = path.exists()
+    try:
+        with path.open("ab"):
+            pass
+    except OSError as exc:
+        raise CommandError(f"{option} {path}: cannot write ({exc.strerror or exc})") from None
+    if not existed:
+        try:
+            path.unlink()
+        except OSError:
+            pass
+    return path
+
+
+def plot_file(path, option: str = "--plot") -> Path:
+    """`output_file` for a figure: the suffix must be one matplotlib writes."""
+    if path is None:
+        return None
+    suffix = Path(str(path)).suffix.lower()
+    if suffix not in PLOT_SUFFIXES:
+        raise CommandError(f"{option} {path}: unknown figure type {suffix or '(no suffix)'!r}; "
+                           f"use one of {', '.join(PLOT_SUFFIXES)}")
+    return output_file(path, option)
+
+
+def output_dir(path, option: str = "--out") -> Path:
+    """Create the folder `path` (and its parents) if missing and check that it is writable."""
+    if path is None:
+        return None
+    path = Path(os.path.expanduser(str(path)))
+    if path.exists() and not path.is_dir():
+        raise CommandError(f"{option} {path}: is a file, not a folder")
+    _check_parent(path, option)
+    try:
+        path.mkdir(exist_ok=True)
+    except OSError as exc:
+        raise CommandError(f"{option} {path}: cannot create the folder "
+                           f"({exc.strerror or exc})") from None
+    probe = path / f".snapmorph-write-test-{os.getpid()}"
+    try:
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise CommandError(f"{option} {path}: folder is not writable "
+                           f"({exc.strerror or exc})") from None
+    return path
+
+
+def input_file(path, option: str = "input") -> Path:
+    """Check that `path` is an existing, readable file; return it as a Path."""
+    if path is None:
+        return None
+    path = Path(os.path.expanduser(str(path)))
+    if not path.exists():
+        raise CommandError(f"{option} {path}: no such file")
+    if path.is_dir():
+        raise CommandError(f"{option} {path}: is a folder, not a file")
+    try:
+        with path.open("rb") as fh:
+            fh.read(1)
+    except OSError as exc:
+        raise CommandError(f"{option} {path}: cannot read ({exc.strerror or exc})") from None
+    return path

@@ -1,0 +1,93 @@
+"""`snapmorph unit2d`: the paper's 2-D unit (square frame, two crossing arches), in mm."""
+
+from __future__ import annotations
+
+import argparse
+
+from snapmorph.commands._common import integer, length_mm, number, output_file, plot_file
+
+HELP = """Simulate the paper's 2-D unit: a square frame base of side L made of strips of width w,
+with two arches joining opposite midpoints of its sides and crossing (bonded) at the apex,
+pushed down at the apex. Reports F_cr, the equilibrium displacements, bistability and, for
+each side of the square in the second stable state, the chord S, the angle theta between its
+end tangents and its mean curvature. Lengths in millimetres, E in pascals (the Python API,
+units.unit2d, is SI)."""
+
+
+def add_parser(sub):
+    p = sub.add_parser("unit2d", help="simulate the 2-D unit (square frame, crossing arches; mm)",
+                       description=HELP)
+    p.add_argument("--L", type=length_mm(what="side of the square"), required=True,
+                   help="side of the square base, mm")
+    p.add_argument("--h", type=length_mm(what="arch apex height"), required=True,
+                   help="arch apex height, mm")
+    p.add_argument("--t", type=length_mm(what="sheet thickness"), required=True,
+                   help="sheet thickness, mm")
+    p.add_argument("--w", type=length_mm(what="strip width"), required=True, help="strip width, mm")
+    p.add_argument("--b", type=length_mm(0.0, low_inclusive=True, what="extra flat length"),
+                   default=0.0, help="extra flat length of the arch ends beyond the frame strip, "
+                   "mm (default 0)")
+    p.add_argument("--E", type=number("Pa", 0.0, what="Young's modulus"), default=2.2e9,
+                   help="Young's modulus, Pa (default 2.2e9, PETG)")
+    p.add_argument("--nu", type=number("", -1.0, 0.5, what="Poisson's ratio"), default=0.38,
+                   help="Poisson's ratio (default 0.38, PETG)")
+    p.add_argument("--nodes", type=integer(11, 1001, what="nodes along a side"), default=None,
+                   help="resolution: nodes along one side of the square (default 41)")
+    p.add_argument("--plot", metavar="PNG", help="write the two stable states in perspective "
+                   "and the force-displacement curve")
+    p.add_argument("--json", metavar="FILE", help="write the metrics and the curve as JSON")
+    p.set_defaults(run=run)
+    return p
+
+
+def _fmt(value, scale=1.0, digits=4):
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if value != value:
+        return "n/a"
+    return f"{value * scale:.{digits}g}"
+
+
+def run(args: argparse.Namespace) -> int:
+    import json
+
+    plot = plot_file(args.plot)
+    js = output_file(args.json, "--json")
+    from units.frame3d import UnitGeometry
+    from units.unit2d import SIDES, simulate_unit_2d
+
+    mm = 1e-3
+    g = UnitGeometry(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm, b=args.b * mm,
+                     E=args.E)
+    r = simulate_unit_2d(g, nodes=args.nodes, nu=args.nu)
+    print(f"unit2d L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm")
+    rows = [("status", r.status, ""), ("bistable", _fmt(r.bistable), ""),
+            ("F_cr", _fmt(r.F_cr), "N"), ("d_cr", _fmt(r.d_cr, 1e3), "mm"),
+            ("d_unstable (ii)", _fmt(r.d_unstable, 1e3), "mm"),
+            ("d_second (iii)", _fmt(r.d_second, 1e3), "mm"),
+            ("nodes", str(r.n_nodes), ""), ("solve time", _fmt(r.solve_time, 1e3, 3), "ms")]
+    for name, value, unit in rows:
+        print(f"  {name:<20} {value:>12} {unit}")
+    edges = r.edges.get("iii")
+    if edges:
+        print("  sides in state (iii):   S (mm)   theta (deg)   curvature (1/m)   sag (mm)")
+        for side in SIDES:
+            m = edges[side]
+            print(f"    {side:<8} {_fmt(m['S'], 1e3):>14} {_fmt(m['theta_deg']):>13} "
+                  f"{_fmt(m['curvature']):>17} {_fmt(m['sag'], 1e3):>10}")
+    if js:
+        payload = {k: (None if isinstance(v, float) and v != v else v)
+                   for k, v in r.summary().items()}
+        payload["geometry_m"] = {k: getattr(g, k) for k in ("L", "h", "t", "w", "b", "E")}
+        payload["curve"] = {"d_m": r.curve[0].tolist(), "F_N": r.curve[1].tolist()}
+        with open(js, "w") as fh:
+            json.dump(payload, fh, indent=1)
+        print(f"wrote {js}")
+    if plot:
+        from snapmorph.figures_unit3d import plot_unit2d_states
+
+        plot_unit2d_states(r, plot)
+        print(f"wrote {plot}")
+    return 0 if r.status in ("ok", "monostable") else 1

@@ -1,0 +1,124 @@
+"""`snapmorph unit3d`: the unit in 3-D (frame base, imperfections), lengths in millimetres."""
+
+from __future__ import annotations
+
+import argparse
+
+from snapmorph.commands._common import integer, length_mm, number, output_file, plot_file
+
+HELP = """Simulate one bistable unit in 3-D: a rectangular frame base (two side rails of width w,
+solid end regions of width 4w), the arch through the frame's hole, rollers and actuator, on
+3-D discrete elastic rods. Optional imperfections: the arch tilted about the base's axis, the
+apex offset sideways, the actuator off centre. Reports the planar metrics (F_cr, d's, S,
+theta) and the arch's tilt and the rails' twist in states (i)-(iii). Lengths in millimetres,
+angles in degrees, E in pascals. (The Python API, units.unit3d, is SI throughout.)"""
+
+
+def add_parser(sub):
+    p = sub.add_parser("unit3d", help="simulate one unit in 3-D with imperfections (mm)",
+                       description=HELP)
+    p.add_argument("--L", type=length_mm(what="base length"), required=True, help="base length, mm")
+    p.add_argument("--h", type=length_mm(what="arch apex height"), required=True,
+                   help="arch apex height, mm")
+    p.add_argument("--t", type=length_mm(what="sheet thickness"), required=True,
+                   help="sheet thickness, mm")
+    p.add_argument("--w", type=length_mm(what="strip width"), required=True, help="strip width, mm")
+    p.add_argument("--b", type=length_mm(0.0, low_inclusive=True, what="extra flat length"),
+                   default=0.0, help="extra flat length of the arch ends, mm (default 0; the "
+                   "paper's specimens use b = w)")
+    p.add_argument("--E", type=number("Pa", 0.0, what="Young's modulus"), default=2.2e9,
+                   help="Young's modulus, Pa (default 2.2e9, PETG)")
+    p.add_argument("--nu", type=number("", -1.0, 0.5, what="Poisson's ratio"), default=0.38,
+                   help="Poisson's ratio (default 0.38, PETG)")
+    p.add_argument("--tilt", type=number("deg", -45.0, 45.0, low_inclusive=True,
+                                         what="arch tilt about the base axis"), default=0.0,
+                   help="arch tilt about the base's axis, degrees (default 0)")
+    p.add_argument("--apex-offset", type=number("mm", what="sideways apex offset"), default=0.0,
+                   help="sideways (y) offset of the apex, mm (default 0)")
+    p.add_argument("--actuator-offset", type=number("mm", what="actuator offset along x"),
+                   default=0.0, help="actuator position from mid-span along x, mm (default 0)")
+    p.add_argument("--nodes", type=integer(21, 2001, what="nodes along a rail"), default=None,
+                   help="resolution: nodes along a rail (default 101)")
+    p.add_argument("--planar", action="store_true",
+                   help="also run the planar model and print both side by side")
+    p.add_argument("--plot", metavar="PNG", help="write the states (i)-(iii) in perspective "
+                   "and the force-displacement curve")
+    p.add_argument("--json", metavar="FILE", help="write the metrics and the curve as JSON")
+    p.set_defaults(run=run)
+    return p
+
+
+def _fmt(value, scale=1.0, digits=4):
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if value != value:
+        return "n/a"
+    return f"{value * scale:.{digits}g}"
+
+
+def run(args: argparse.Namespace) -> int:
+    import json
+
+    plot = plot_file(args.plot)
+    js = output_file(args.json, "--json")
+    from units.frame3d import UnitGeometry
+    from units.unit3d import simulate_unit_3d
+
+    from snapmorph.cli import CommandError
+
+    if abs(args.apex_offset) > args.h:
+        raise CommandError(f"--apex-offset must be within [-h, h] = [{-args.h:g}, {args.h:g}] mm "
+                           f"(sideways apex offset); got {args.apex_offset:g}")
+    quarter = 0.25 * (args.L - 2 * (args.b + args.w))
+    if abs(args.actuator_offset) > quarter:
+        raise CommandError(f"--actuator-offset must be within [{-quarter:g}, {quarter:g}] mm (a "
+                           f"quarter of the arch span L - 2(b + w)); got {args.actuator_offset:g}")
+    mm = 1e-3
+    g = UnitGeometry(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm, b=args.b * mm,
+                     E=args.E)
+    r = simulate_unit_3d(g, nodes=args.nodes, tilt_deg=args.tilt,
+                         apex_offset=args.apex_offset * mm,
+                         actuator_offset=args.actuator_offset * mm, nu=args.nu)
+    planar = None
+    if args.planar:
+        from solver.unit import simulate_unit
+
+        planar = simulate_unit(g)
+    rows = [("status", r.status, ""), ("bistable", _fmt(r.bistable), ""),
+            ("F_cr", _fmt(r.F_cr), "N"), ("d_cr", _fmt(r.d_cr, 1e3), "mm"),
+            ("d_unstable (ii)", _fmt(r.d_unstable, 1e3), "mm"),
+            ("d_second (iii)", _fmt(r.d_second, 1e3), "mm"),
+            ("S", _fmt(r.S, 1e3), "mm"), ("theta", _fmt(r.theta_deg), "deg")]
+    for state in ("i", "ii", "iii"):
+        rows.append((f"arch tilt ({state})", _fmt(r.arch_tilt_deg.get(state)), "deg"))
+    for state in ("i", "ii", "iii"):
+        rows.append((f"rail twist ({state})", _fmt(r.rail_twist_deg.get(state)), "deg"))
+    rows += [("nodes", str(r.n_nodes), ""), ("solve time", _fmt(r.solve_time, 1e3, 3), "ms")]
+    print(f"unit3d L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm, "
+          f"tilt={args.tilt:g} deg, apex offset={args.apex_offset:g} mm, actuator offset="
+          f"{args.actuator_offset:g} mm")
+    planar_rows = {"F_cr": (planar.F_cr, 1.0), "d_cr": (planar.d_cr, 1e3),
+                   "d_unstable (ii)": (planar.d_unstable, 1e3),
+                   "d_second (iii)": (planar.d_second, 1e3), "S": (planar.S, 1e3),
+                   "theta": (planar.theta_deg, 1.0)} if planar else {}
+    for name, value, unit in rows:
+        extra = ""
+        if name in planar_rows:
+            extra = f"   planar {_fmt(planar_rows[name][0], planar_rows[name][1]):>10}"
+        print(f"  {name:<20} {value:>12} {unit:<4}{extra}")
+    if js:
+        payload = {k: (None if isinstance(v, float) and v != v else v)
+                   for k, v in r.summary().items()}
+        payload["geometry_m"] = {k: getattr(g, k) for k in ("L", "h", "t", "w", "b", "E")}
+        payload["curve"] = {"d_m": r.curve[0].tolist(), "F_N": r.curve[1].tolist()}
+        with open(js, "w") as fh:
+            json.dump(payload, fh, indent=1)
+        print(f"wrote {js}")
+    if plot:
+        from snapmorph.figures_unit3d import plot_unit3d_states
+
+        plot_unit3d_states(r, plot, planar=planar)
+        print(f"wrote {plot}")
+    return 0 if r.status in ("ok", "monostable") else 1

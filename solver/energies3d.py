@@ -1,0 +1,277 @@
+"""Energy kernels of 3-D discrete elastic rods (Bergou et al. 2008, 2010; Jawed, Novelia &
+O'Reilly 2018), each returning its value and writing its exact gradient and Hessian.
+
+- stretching, per edge: ``E_s = 1/2 (EA / |e_bar|) (|e| - |e_bar|)^2``; local coordinates
+  ``[xa, ya, za, xb, yb, zb]`` (m).
+- bending, per pair of edges meeting at a node (or at a rigid joint or a clamp):
+  ``E_b = 1/2 k1 (kappa1 - kappa1_bar)^2 + 1/2 k2 (kappa2 - kappa2_bar)^2`` with the
+  curvature binormal ``kb = 2 t_a x t_b / (1 + t_a . t_b)`` and the material curvatures
+  ``kappa1 = 1/2 (m2_a + m2_b) . kb`` (bending through the thickness, k1 = EI1 / l_bar) and
+  ``kappa2 = -1/2 (m1_a + m1_b) . kb`` (bending in the strip's plane, k2 = EI2 / l_bar);
+  kappa are integrated (dimensionless), l_bar the Voronoi length.
+- twisting, per pair of edges: ``E_t = 1/2 kt (psi - psi_bar)^2``, kt = GJ / l_bar, where psi
+  is the twist angle from frame a to frame b: with Q = sum_k b_k a_k^T the rotation between
+  the frames (t, m1, m2), ``tan(psi / 2) = ((sum_k a_k x b_k) . t_a) / (1 + tr Q)``. This is
+  theta_b - theta_a + the reference twist, read off the material frames directly.
+
+Bending and twisting take the 18 frame components ``z = [t_a, m1_a, m2_a, t_b, m1_b, m2_b]``
+as independent variables (gradient (18,), Hessian (18, 18)); `chain_pair` carries them to
+the edges' vectors and twist angles through `solver.frames3d.material_frame_jet`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def stretch_terms(x, EA, rest_length, grad, hess):
+    """Stretching energy (J) of one edge; ``x`` = [xa, ya, za, xb, yb, zb] (m), EA (N),
+    rest length (m). Writes dE/dx into ``grad`` (6,) and d2E/dx2 into ``hess`` (6, 6)."""
+    e = np.empty(3)
+    for k in range(3):
+        e[k] = x[3 + k] - x[k]
+    length = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+    k_axial = EA / rest_length
+    stretch = length - rest_length
+    c = k_axial * stretch / length
+    for i in range(3):
+        ti = e[i] / length
+        grad[i] = -k_axial * stretch * ti
+        grad[3 + i] = k_axial * stretch * ti
+        for j in range(3):
+            tj = e[j] / length
+            # d2E/de2 = k t t^T + (k stretch / |e|) (I - t t^T)
+            h = k_axial * ti * tj + c * ((1.0 if i == j else 0.0) - ti * tj)
+            hess[i, j] = h
+            hess[3 + i, 3 + j] = h
+            hess[i, 3 + j] = -h
+            hess[3 + i, j] = -h
+    return 0.5 * k_axial * stretch * stretch
+
+
+@njit(cache=True, inline="always")
+def _eps(i, j, k):
+    """Levi-Civita symbol for indices in 0..2."""
+    return 0.5 * (i - j) * (j - k) * (k - i)
+
+
+@njit(cache=True)
+def _triple(z, p, q, r, coef, grad, hess):
+    """Add coef * p . (q x r) (p, q, r: offsets of 3-vectors in z) to grad and hess; returns
+    its value."""
+    val = 0.0
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                e = _eps(i, j, k)
+                if e == 0.0:
+                    continue
+                ce = coef * e
+                val += e * z[p + i] * z[q + j] * z[r + k]
+                grad[p + i] += ce * z[q + j] * z[r + k]
+                grad[q + j] += ce * z[p + i] * z[r + k]
+                grad[r + k] += ce * z[p + i] * z[q + j]
+                hess[p + i, q + j] += ce * z[r + k]
+                hess[q + j, p + i] += ce * z[r + k]
+                hess[p + i, r + k] += ce * z[q + j]
+                hess[r + k, p + i] += ce * z[q + j]
+                hess[q + j, r + k] += ce * z[p + i]
+                hess[r + k, q + j] += ce * z[p + i]
+    return coef * val
+
+
+@njit(cache=True)
+def _dot(z, p, q, grad, hess):
+    """Add z[p:p+3] . z[q:q+3] to grad and hess (p != q); returns its value."""
+    val = 0.0
+    for i in range(3):
+        val += z[p + i] * z[q + i]
+        grad[p + i] += z[q + i]
+        grad[q + i] += z[p + i]
+        hess[p + i, q + i] += 1.0
+        hess[q + i, p + i] += 1.0
+    return val
+
+
+@njit(cache=True)
+def _quotient(num, gn, hn, den, gd, hd, grad, hess):
+    """grad, hess of num / den from those of num and den; returns the value."""
+    inv = 1.0 / den
+    f = num * inv
+    n = grad.shape[0]
+    for i in range(n):
+        grad[i] = (gn[i] - f * gd[i]) * inv
+    for i in range(n):
+        for j in range(n):
+            hess[i, j] = (hn[i, j] - f * hd[i, j]
+                          - (gn[i] * gd[j] + gd[i] * gn[j]) * inv
+                          + 2.0 * f * gd[i] * gd[j] * inv) * inv
+    return f
+
+
+@njit(cache=True)
+def material_curvature(z, which, grad, hess):
+    """kappa1 (``which`` = 1) or kappa2 (2) of the frame pair ``z`` (18,); writes its gradient
+    (18,) and Hessian (18, 18) w.r.t. z."""
+    gn = np.zeros(18)
+    hn = np.zeros((18, 18))
+    gd = np.zeros(18)
+    hd = np.zeros((18, 18))
+    # kappa1 = (m2_a + m2_b) . (t_a x t_b) / D, kappa2 = -(m1_a + m1_b) . (t_a x t_b) / D
+    if which == 1:
+        num = _triple(z, 6, 0, 9, 1.0, gn, hn) + _triple(z, 15, 0, 9, 1.0, gn, hn)
+    else:
+        num = _triple(z, 3, 0, 9, -1.0, gn, hn) + _triple(z, 12, 0, 9, -1.0, gn, hn)
+    den = 1.0 + _dot(z, 0, 9, gd, hd)
+    return _quotient(num, gn, hn, den, gd, hd, grad, hess)
+
+
+@njit(cache=True)
+def bending_terms(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess):
+    """Bending energy (J) of a frame pair ``z`` (18,) with stiffnesses k1, k2 = EI / l_bar
+    (N m) and natural integrated curvatures; writes grad (18,) and hess (18, 18)."""
+    g = np.empty(18)
+    h = np.empty((18, 18))
+    grad[:] = 0.0
+    hess[:, :] = 0.0
+    energy = 0.0
+    for which in range(1, 3):
+        kappa = material_curvature(z, which, g, h)
+        k = k1 if which == 1 else k2
+        dk = kappa - (kappa1_bar if which == 1 else kappa2_bar)
+        energy += 0.5 * k * dk * dk
+        for i in range(18):
+            grad[i] += k * dk * g[i]
+            for j in range(18):
+                hess[i, j] += k * (g[i] * g[j] + dk * h[i, j])
+    return energy
+
+
+@njit(cache=True)
+def twist_angle(z, grad, hess):
+    """Twist psi (rad) from frame a to frame b of ``z`` (18,); writes grad and hess."""
+    gx = np.zeros(18)
+    hx = np.zeros((18, 18))
+    gy = np.zeros(18)
+    hy = np.zeros((18, 18))
+    X = 1.0 + _dot(z, 0, 9, gx, hx) + _dot(z, 3, 12, gx, hx) + _dot(z, 6, 15, gx, hx)
+    Y = _triple(z, 0, 3, 12, 1.0, gy, hy) + _triple(z, 0, 6, 15, 1.0, gy, hy)
+    r2 = X * X + Y * Y
+    psi = 2.0 * np.arctan2(Y, X)
+    N = np.empty(18)
+    for i in range(18):
+        N[i] = X * gy[i] - Y * gx[i]
+        grad[i] = 2.0 * N[i] / r2
+    for i in range(18):
+        for j in range(18):
+            hess[i, j] = (2.0 * (X * hy[i, j] - Y * hx[i, j] + gx[j] * gy[i] - gy[j] * gx[i]) / r2
+                          - 4.0 * N[i] * (X * gx[j] + Y * gy[j]) / (r2 * r2))
+    return psi
+
+
+@njit(cache=True)
+def twist_terms(z, kt, psi_bar, grad, hess):
+    """Twisting energy (J) of a frame pair ``z`` with stiffness kt = GJ / l_bar (N m) and
+    natural twist psi_bar (rad); writes grad (18,) and hess (18, 18)."""
+    g = np.empty(18)
+    h = np.empty((18, 18))
+    psi = twist_angle(z, g, h)
+    d = psi - psi_bar
+    for i in range(18):
+        grad[i] = kt * d * g[i]
+        for j in range(18):
+            hess[i, j] = kt * (g[i] * g[j] + d * h[i, j])
+    return 0.5 * kt * d * d
+
+
+@njit(cache=True)
+def pair_frames(val_a, sign_a, val_b, sign_b, z):
+    """z (18,) from the two edges' frames [t, m1, m2]; an edge used against its direction
+    (sign -1) enters as the proper frame (-t, m1, -m2)."""
+    for k in range(3):
+        z[k] = sign_a * val_a[k]
+        z[3 + k] = val_a[3 + k]
+        z[6 + k] = sign_a * val_a[6 + k]
+        z[9 + k] = sign_b * val_b[k]
+        z[12 + k] = val_b[3 + k]
+        z[15 + k] = sign_b * val_b[6 + k]
+
+
+@njit(cache=True)
+def chain_pair(gz, hz, jac_a, hess_a, sign_a, jac_b, hess_b, sign_b, g8, h8):
+    """Carry a gradient (18,) and Hessian (18, 18) w.r.t. z to p = (e_a, theta_a, e_b,
+    theta_b) (8,) through the frames' derivatives (`material_frame_jet`):
+    g8 = J^T gz, h8 = J^T hz J + sum_c gz_c d2 z_c / dp2 (J block diagonal, 9 x 4 blocks)."""
+    J = np.zeros((18, 8))
+    for c in range(9):
+        f = sign_a if (c < 3 or c >= 6) else 1.0
+        fb = sign_b if (c < 3 or c >= 6) else 1.0
+        for r in range(4):
+            J[c, r] = f * jac_a[c, r]
+            J[9 + c, 4 + r] = fb * jac_b[c, r]
+    HJ = np.zeros((18, 8))
+    for i in range(18):
+        s0 = 0 if i < 9 else 9  # hz is dense, J block diagonal: use both blocks
+        for r in range(8):
+            blk = 0 if r < 4 else 9
+            acc = 0.0
+            for c in range(9):
+                acc += hz[i, blk + c] * J[blk + c, r]
+            HJ[i, r] = acc
+    for r in range(8):
+        blk = 0 if r < 4 else 9
+        acc = 0.0
+        for c in range(9):
+            acc += gz[blk + c] * J[blk + c, r]
+        g8[r] = acc
+        for s in range(r, 8):
+            acc = 0.0
+            for c in range(9):
+                acc += J[blk + c, r] * HJ[blk + c, s]
+            h8[r, s] = acc
+            h8[s, r] = acc
+    for c in range(9):
+        f = sign_a if (c < 3 or c >= 6) else 1.0
+        fb = sign_b if (c < 3 or c >= 6) else 1.0
+        ga = f * gz[c]
+        gb = fb * gz[9 + c]
+        for r in range(4):
+            for s in range(4):
+                h8[r, s] += ga * hess_a[c, r, s]
+                h8[4 + r, 4 + s] += gb * hess_b[c, r, s]
+
+
+@njit(cache=True)
+def tip_moment_terms(e, moment, axis, grad, hess):
+    """Potential (J) of a dead couple ``moment`` (N m) about the unit ``axis`` acting on an
+    edge ``e`` (3,) that turns in the plane normal to the axis: V = -M phi, phi the angle of
+    e about the axis (measured from the reference direction of its plane projection is not
+    needed: only derivatives matter and phi = atan2 is used directly). Writes grad (3,) and
+    hess (3, 3) w.r.t. e."""
+    # basis of the plane normal to the axis
+    a = axis
+    if abs(a[0]) < 0.9:
+        ux, uy, uz = 0.0 - a[0] * a[0], 0.0 - a[1] * a[0] + 0.0, 0.0 - a[2] * a[0]
+        ux += 1.0
+    else:
+        ux, uy, uz = 0.0 - a[0] * a[1], 1.0 - a[1] * a[1], 0.0 - a[2] * a[1]
+    nu = np.sqrt(ux * ux + uy * uy + uz * uz)
+    u = np.array([ux / nu, uy / nu, uz / nu])
+    v = np.array([a[1] * u[2] - a[2] * u[1], a[2] * u[0] - a[0] * u[2], a[0] * u[1] - a[1] * u[0]])
+    p = e[0] * u[0] + e[1] * u[1] + e[2] * u[2]
+    r = e[0] * v[0] + e[1] * v[1] + e[2] * v[2]
+    rho2 = p * p + r * r
+    phi = np.arctan2(r, p)
+    # d phi = (p dr - r dp) / rho2
+    for i in range(3):
+        grad[i] = -moment * (p * v[i] - r * u[i]) / rho2
+    for i in range(3):
+        gi = p * v[i] - r * u[i]
+        for j in range(3):
+            dgi = u[j] * v[i] - v[j] * u[i]
+            gj = p * v[j] - r * u[j]
+            drho = 2.0 * (p * u[j] + r * v[j])
+            hess[i, j] = -moment * (dgi / rho2 - gi * drho / (rho2 * rho2))
+    return -moment * phi

@@ -1,0 +1,675 @@
+"""`Structure3D`: discrete elastic rods in 3-D (rectangular strips with twist), their rigid
+joints, ties, supports and clamps, and the push experiment on the shared path followers.
+
+Physics in `solver.energies3d` and `solver.frames3d`, assembly in `solver.assembly3d`, the
+constrained system in `solver.system3d`; the drivers are the planar solver's own
+(`solver.continuation`, `solver.branching`) through docs/problem-interface.md. SI units.
+
+>>> st = Structure3D()
+>>> rod = st.add_rod(xyz, width=5e-3, thickness=0.5e-3, E=2.2e9, nu=0.38, normal=(0, 0, 1))
+>>> st.clamp(rod.nodes[0], toward=rod.nodes[1])
+>>> path = st.push(rod.nodes[-1], direction=(0.0, 0.0, -1.0), distance=0.02)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse
+import scipy.sparse.csgraph
+
+from solver.energies3d import material_curvature, tip_moment_terms, twist_angle
+from solver.frames3d import space_parallel_frames
+from solver.system3d import RodSystem3D
+
+_AXES = "xyz"
+
+
+def torsion_constant(width, thickness):
+    """J (m^4) of a w x t rectangle: w t^3 (1/3 - 0.21 (t/w)(1 - (t/w)^4 / 12)), t <= w
+    (the two sides swapped for t > w)."""
+    a = np.maximum(width, thickness)
+    b = np.minimum(width, thickness)
+    r = b / a
+    return a * b**3 * (1.0 / 3.0 - 0.21 * r * (1.0 - r**4 / 12.0))
+
+
+@dataclass(frozen=True, eq=False)
+class Rod3D:
+    """One rod of a `Structure3D`: global node and edge indices (in order), section data."""
+
+    nodes: np.ndarray
+    edges: np.ndarray
+    width: np.ndarray  # (N-1,) m, in the strip's plane
+    thickness: np.ndarray  # (N-1,) m, along the face normal m1
+    E: float  # Pa
+    nu: float
+
+    @property
+    def EA(self):
+        """(N-1,) axial stiffness, N."""
+        return self.E * self.width * self.thickness
+
+    @property
+    def EI1(self):
+        """(N-1,) bending stiffness through the thickness (the easy way), E w t^3 / 12, N m^2."""
+        return self.E * self.width * self.thickness**3 / 12.0
+
+    @property
+    def EI2(self):
+        """(N-1,) bending stiffness in the strip's plane, E t w^3 / 12, N m^2."""
+        return self.E * self.thickness * self.width**3 / 12.0
+
+    @property
+    def GJ(self):
+        """(N-1,) torsional stiffness, G = E / (2 (1 + nu)), N m^2."""
+        return self.E / (2.0 * (1.0 + self.nu)) * torsion_constant(self.width, self.thickness)
+
+
+class _UnionFind:
+    def __init__(self, n):
+        self.parent = list(range(n))
+
+    def find(self, a):
+        while self.parent[a] != a:
+            self.parent[a] = self.parent[self.parent[a]]
+            a = self.parent[a]
+        return a
+
+    def union(self, a, b):
+        ra, rb = self.find(a), self.find(b)
+        if ra != rb:
+            self.parent[max(ra, rb)] = min(ra, rb)
+
+
+def _finite_array(value, name, unit):
+    if isinstance(value, (str, bytes)) or value is None:
+        raise ValueError(f"{name} must be numbers in {unit}; got {value!r}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be real numbers in {unit}; got {value!r}") from exc
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite ({unit}); got {value!r}")
+    return arr
+
+
+def _per_edge(value, n_edges, name):
+    arr = _finite_array(value, name, "m")
+    if arr.ndim == 0:
+        arr = np.full(n_edges, float(arr))
+    if arr.shape != (n_edges,):
+        raise ValueError(f"{name} must be a scalar or one value per edge, shape ({n_edges},) "
+                         f"(m); got shape {arr.shape}")
+    if np.any(arr <= 0.0):
+        raise ValueError(f"{name} must be > 0 m; got min {arr.min()!r}")
+    return arr
+
+
+def _frame_pair(ta, da, tb, db, sa=1.0, sb=1.0):
+    """The 18 frame components of `solver.energies3d` for two (tangent, m1) frames."""
+    z = np.empty(18)
+    for s, (t, d, sg) in enumerate(((ta, da, sa), (tb, db, sb))):
+        z[9 * s: 9 * s + 9] = np.concatenate([sg * t, d, sg * np.cross(t, d)])
+    return z
+
+
+def _natural(z):
+    """(kappa1, kappa2, psi) of a frame pair: the natural values of a stress-free pair."""
+    g = np.empty(18)
+    h = np.empty((18, 18))
+    return (material_curvature(z, 1, g, h), material_curvature(z, 2, g, h),
+            twist_angle(z, g, h))
+
+
+class Structure3D:
+    """Discrete elastic rods in 3-D: positions (x, y, z) per node, one twist angle per edge.
+
+    The full state vector is ``3 n_nodes`` positions (m) then ``n_edges`` twists (rad).
+    Provides the problem interface of the path followers (docs/problem-interface.md).
+    """
+
+    dim = 3
+    component_names = "xyz"
+
+    def __init__(self):
+        self.rods: list[Rod3D] = []
+        self._positions: list[np.ndarray] = []
+        self._tangents: list[np.ndarray] = []
+        self._directors: list[np.ndarray] = []
+        self._lengths: list[np.ndarray] = []
+        self._edge_nodes: list[np.ndarray] = []
+        # bending/twisting pairs: key -> (frame_a, sign_a, frame_b, sign_b, k1, k2, kt,
+        # kappa1_bar, kappa2_bar, psi_bar); frames >= 0 are edges, < 0 clamp frames -1 - c
+        self._pairs: dict = {}
+        self._clamp_frames: list[tuple[np.ndarray, np.ndarray]] = []
+        self._clamped: set[int] = set()
+        self._fixed: dict[int, set[int]] = {}
+        self._merges: list[tuple[int, int]] = []
+        self._cache = None
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def n_nodes(self) -> int:
+        return int(sum(len(p) for p in self._positions))
+
+    @property
+    def n_edges(self) -> int:
+        return int(sum(len(p) - 1 for p in self._positions))
+
+    @property
+    def reference_positions(self) -> np.ndarray:
+        """(n_nodes, 3) stress-free node positions, m."""
+        if not self._positions:
+            return np.zeros((0, 3))
+        return np.concatenate(self._positions, axis=0)
+
+    def reference_frames(self):
+        """(tangents, directors), each (n_edges, 3): the stress-free edges' unit tangents
+        and face normals m1 (the material frames at theta = 0)."""
+        return np.concatenate(self._tangents), np.concatenate(self._directors)
+
+    # ------------------------------------------------------------------ building
+    def add_rod(self, xyz, width, thickness, E, nu=0.38, normal=(0.0, 0.0, 1.0), *,
+                natural_curvature=None, natural_twist=None) -> Rod3D:
+        """Add a strip through the points ``xyz`` (N, 3) m; its shape is stress free.
+
+        ``width``, ``thickness`` (m): scalars or one per edge (N-1,); ``E`` Young's modulus
+        (Pa), ``nu`` Poisson's ratio (G = E / (2 (1 + nu))). ``normal``: the strip's face
+        normal (thickness direction) at the first edge, carried along the rod by parallel
+        transport; or one normal per edge (N-1, 3) for a strip with a natural twist.
+        ``natural_curvature`` (1/m): (kappa1, kappa2) or one pair per interior node (N-2, 2),
+        and ``natural_twist`` (rad/m): scalar or (N-2,), replace the natural curvature and
+        twist read off the stress-free shape (e.g. a straight rod that wants to be a helix).
+        """
+        xyz = _finite_array(xyz, "xyz", "m")
+        if xyz.ndim != 2 or xyz.shape[1] != 3:
+            raise ValueError(f"xyz must be an (N, 3) array of node positions in m; got shape "
+                             f"{xyz.shape}")
+        n = xyz.shape[0]
+        if n < 2:
+            raise ValueError(f"a rod needs at least 2 nodes; got {n}")
+        e = np.diff(xyz, axis=0)
+        lengths = np.linalg.norm(e, axis=1)
+        scale = max(float(np.max(np.ptp(xyz, axis=0))), 1e-300)
+        if np.any(lengths <= 1e-9 * scale):
+            i = int(np.argmin(lengths))
+            raise ValueError(f"xyz has coincident consecutive nodes (edge {i} has zero length)")
+        tangents = e / lengths[:, None]
+        if n > 2 and np.any(np.sum(tangents[:-1] * tangents[1:], axis=1) < -0.9):
+            raise ValueError("xyz turns back on itself (an edge turns by more than ~150 degrees)")
+        width = _per_edge(width, n - 1, "width")
+        thickness = _per_edge(thickness, n - 1, "thickness")
+        if isinstance(E, (bool, np.bool_)) or not np.isscalar(E):
+            raise ValueError(f"E (Young's modulus) must be a number in Pa; got {E!r}")
+        E = float(_finite_array(E, "E (Young's modulus)", "Pa"))
+        if not E > 0.0:
+            raise ValueError(f"E (Young's modulus) must be finite and > 0 Pa; got {E!r}")
+        if isinstance(nu, (bool, np.bool_)) or not np.isscalar(nu):
+            raise ValueError(f"nu (Poisson's ratio) must be a number; got {nu!r}")
+        nu = float(_finite_array(nu, "nu (Poisson's ratio)", "-"))
+        if not -1.0 < nu <= 0.5:
+            raise ValueError(f"nu (Poisson's ratio) must be in (-1, 0.5]; got {nu!r}")
+        normal = _finite_array(normal, "normal", "a direction")
+        if normal.shape not in ((3,), (n - 1, 3)):
+            raise ValueError(f"normal must be a 3-vector or one per edge, shape ({n - 1}, 3); "
+                             f"got shape {normal.shape}")
+        nn = np.atleast_2d(normal)
+        tt = tangents[:1] if normal.ndim == 1 else tangents
+        nlen = np.linalg.norm(nn, axis=1)
+        if np.any(nlen == 0.0) or np.any(
+                np.linalg.norm(np.cross(nn, tt), axis=1) <= 1e-6 * nlen):
+            raise ValueError("normal must be non-zero and not parallel to its edge (it is the "
+                             "strip's face normal, across the rod)")
+        directors = space_parallel_frames(tangents, normal)
+
+        start_node = self.n_nodes
+        start_edge = self.n_edges
+        nodes = np.arange(start_node, start_node + n, dtype=np.int64)
+        edges = np.arange(start_edge, start_edge + n - 1, dtype=np.int64)
+        rod = Rod3D(nodes=nodes, edges=edges, width=width, thickness=thickness, E=E, nu=nu)
+
+        kbar = tw = None
+        if natural_curvature is not None or natural_twist is not None:
+            lbar = 0.5 * (lengths[:-1] + lengths[1:])
+            kbar = np.zeros((n - 2, 2))
+            tw = np.zeros(n - 2)
+            if natural_curvature is not None:
+                kc = _finite_array(natural_curvature, "natural_curvature", "1/m")
+                if kc.shape not in ((2,), (n - 2, 2)):
+                    raise ValueError(f"natural_curvature must be (kappa1, kappa2) or shape "
+                                     f"({n - 2}, 2) (1/m); got shape {kc.shape}")
+                kbar[:] = kc * lbar[:, None]
+            if natural_twist is not None:
+                tc = _finite_array(natural_twist, "natural_twist", "rad/m")
+                if tc.shape not in ((), (n - 2,)):
+                    raise ValueError(f"natural_twist must be a scalar or shape ({n - 2},) "
+                                     f"(rad/m); got shape {tc.shape}")
+                tw[:] = tc * lbar
+        self.rods.append(rod)
+        self._positions.append(xyz.copy())
+        self._tangents.append(tangents)
+        self._directors.append(directors)
+        self._lengths.append(lengths)
+        self._edge_nodes.append(np.stack([nodes[:-1], nodes[1:]], axis=1))
+        for i in range(1, n - 1):
+            a, b = i - 1, i
+            pair = self._make_pair(rod, a, 1.0, rod, b, 1.0)
+            if kbar is not None:
+                pair = pair[:7] + (kbar[i - 1, 0], kbar[i - 1, 1], tw[i - 1])
+            self._pairs[("node", int(nodes[i]))] = pair
+        self._cache = None
+        return rod
+
+    def _edge_data(self, edge):
+        """(rod, local edge index) of a global edge."""
+        for rod in self.rods:
+            if rod.edges[0] <= edge <= rod.edges[-1]:
+                return rod, int(edge - rod.edges[0])
+        raise IndexError(edge)
+
+    def _frame(self, rod, j):
+        r = next(i for i, other in enumerate(self.rods) if other is rod)
+        return self._tangents[r][j], self._directors[r][j], self._lengths[r][j]
+
+    def _make_pair(self, rod_a, ja, sa, rod_b, jb, sb, lengths=None):
+        """A pair of two rod edges with series stiffnesses over their half lengths and the
+        natural values of the stress-free frames."""
+        ta, da, la = self._frame(rod_a, ja)
+        tb, db, lb = self._frame(rod_b, jb)
+        if lengths is not None:
+            la, lb = lengths
+        ks = [1.0 / (0.5 * la / A[ja] + 0.5 * lb / B[jb])
+              for A, B in ((rod_a.EI1, rod_b.EI1), (rod_a.EI2, rod_b.EI2),
+                           (rod_a.GJ, rod_b.GJ))]
+        nat = _natural(_frame_pair(ta, da, tb, db, sa, sb))
+        return (int(rod_a.edges[ja]), sa, int(rod_b.edges[jb]), sb, *ks, *nat)
+
+    def _check_node(self, node, name="node"):
+        if isinstance(node, (bool, np.bool_)) or not isinstance(node, (int, np.integer)):
+            raise ValueError(f"{name} must be an integer node index; got {node!r}")
+        node = int(node)
+        if self.n_nodes == 0:
+            raise ValueError(f"{name} {node}: the structure has no rods (add_rod first)")
+        if not 0 <= node < self.n_nodes:
+            raise ValueError(f"{name} {node} does not exist (valid: 0 .. {self.n_nodes - 1})")
+        return node
+
+    def _rod_of(self, node):
+        for rod in self.rods:
+            if rod.nodes[0] <= node <= rod.nodes[-1]:
+                return rod, int(node - rod.nodes[0])
+        raise IndexError(node)
+
+    def fix(self, node, components="xyz"):
+        """Hold the displacement of ``node`` at zero in any subset of "x", "y", "z"."""
+        node = self._check_node(node)
+        if (not isinstance(components, str) or not components
+                or any(c not in _AXES for c in components) or len(set(components)) != len(components)):
+            raise ValueError(f"components must be a non-empty subset of 'xyz' such as 'xz'; "
+                             f"got {components!r}")
+        self._fixed.setdefault(node, set()).update(_AXES.index(c) for c in components)
+        self._cache = None
+
+    def clamp(self, node, toward):
+        """Hold the position, tangent and twist of the rod at exactly ``node``; the tangent
+        points to ``toward``, a neighbour of ``node`` on the same rod.
+
+        The clamp is a fixed frame at the node coupled to each adjacent edge by bending and
+        twisting over that edge's half length (the part of the node's Voronoi region on the
+        edge's side), so that the clamped end of a cantilever is at the node itself."""
+        node = self._check_node(node)
+        toward = self._check_node(toward, "toward")
+        rod, i = self._rod_of(node)
+        rod_t, it = self._rod_of(toward)
+        if rod_t is not rod or abs(it - i) != 1:
+            raise ValueError(f"toward ({toward}) must be a neighbour of node {node} on its rod")
+        if node in self._clamped:
+            raise ValueError(f"node {node} is already clamped")
+        r = next(k for k, other in enumerate(self.rods) if other is rod)
+        j_tow = min(i, it)  # the edge between node and toward
+        t = self._tangents[r][j_tow]
+        d = self._directors[r][j_tow]
+        c = len(self._clamp_frames)
+        self._clamp_frames.append((t.copy(), d.copy()))
+        frame = -1 - c
+        self._pairs.pop(("node", node), None)
+        n_local = len(rod.nodes)
+        GJ, EI1, EI2 = rod.GJ, rod.EI1, rod.EI2
+        for j, side in ((i - 1, "before"), (i, "after")):
+            if not 0 <= j < n_local - 1:
+                continue
+            tj, dj, lj = self._frame(rod, j)
+            half = 0.5 * lj
+            ks = (EI1[j] / half, EI2[j] / half, GJ[j] / half)
+            if side == "before":
+                nat = _natural(_frame_pair(tj, dj, t, d))
+                pair = (int(rod.edges[j]), 1.0, frame, 1.0, *ks, *nat)
+            else:
+                nat = _natural(_frame_pair(t, d, tj, dj))
+                pair = (frame, 1.0, int(rod.edges[j]), 1.0, *ks, *nat)
+            self._pairs[("clamp", node, side)] = pair
+        self._clamped.add(node)
+        self.fix(node, "xyz")
+        self._cache = None
+
+    def joint(self, node_a, node_b):
+        """Rigid joint between two rods meeting at the coincident nodes ``node_a`` and
+        ``node_b``: the nodes share their position, and an edge of each rod at the joint is
+        coupled by bending about both axes and twisting (the pair a kink inside one rod would
+        have, with the stress-free angle between them as natural curvature and twist), so
+        orientations are carried through the joint."""
+        a = self._check_node(node_a, "node_a")
+        b = self._check_node(node_b, "node_b")
+        if a == b:
+            raise ValueError(f"cannot joint node {a} to itself")
+        X = self.reference_positions
+        scale = float(np.max(np.ptp(X, axis=0)))
+        if np.linalg.norm(X[a] - X[b]) > 1e-9 * scale:
+            raise ValueError(f"joint needs coincident nodes; nodes {a} and {b} are "
+                             f"{np.linalg.norm(X[a] - X[b]):.3g} m apart")
+        rod_a, ia = self._rod_of(a)
+        rod_b, ib = self._rod_of(b)
+        # edge of rod a pointing into the joint, edge of rod b pointing out of it
+        ja, sa = (ia - 1, 1.0) if ia > 0 else (0, -1.0)
+        jb, sb = (ib, 1.0) if ib < len(rod_b.nodes) - 1 else (ib - 1, -1.0)
+        self._merges.append((a, b))
+        self._pairs[("joint", a, b, len(self._pairs))] = self._make_pair(rod_a, ja, sa, rod_b, jb, sb)
+        self._cache = None
+
+    def tie(self, node_a, node_b, method="exact"):
+        """Bond two nodes: equal displacements (orientations stay independent; see `joint`)."""
+        a = self._check_node(node_a, "node_a")
+        b = self._check_node(node_b, "node_b")
+        if a == b:
+            raise ValueError(f"cannot tie node {a} to itself")
+        if method != "exact":
+            raise ValueError(f"tie method must be 'exact' for 3-D rods; got {method!r}")
+        self._merges.append((a, b))
+        self._cache = None
+
+    def rigid(self, nodes):
+        """Make ``nodes`` translate together."""
+        if isinstance(nodes, (str, bytes)) or not hasattr(nodes, "__iter__"):
+            raise ValueError(f"rigid needs a list of node indices; got {nodes!r}")
+        nodes = [self._check_node(n, "rigid node") for n in nodes]
+        if len(nodes) < 2 or len(set(nodes)) != len(nodes):
+            raise ValueError("rigid needs at least two distinct nodes")
+        for a, b in zip(nodes[:-1], nodes[1:]):
+            self._merges.append((a, b))
+        self._cache = None
+
+    # ------------------------------------------------------------------ problem interface
+    def initial_state(self) -> np.ndarray:
+        """The stress-free state q0 (3 n_nodes + n_edges,): positions (m), zero twists."""
+        return np.concatenate([self.reference_positions.reshape(-1), np.zeros(self.n_edges)])
+
+    def node_dofs(self, node) -> np.ndarray:
+        """(3,) int64 indices into the state vector of ``node``'s x, y, z."""
+        node = int(node)
+        return np.array([3 * node, 3 * node + 1, 3 * node + 2], dtype=np.int64)
+
+    def positions_of(self, q) -> np.ndarray:
+        """(n_nodes, 3) node positions (m) held in the state ``q`` (a view)."""
+        return np.asarray(q)[: 3 * self.n_nodes].reshape(-1, 3)
+
+    def twist_of(self, q) -> np.ndarray:
+        """(n_edges,) twist angles (rad) held in the state ``q`` (a view)."""
+        return np.asarray(q)[3 * self.n_nodes:]
+
+    def state_fields(self, q) -> dict:
+        """{"twist": (n_edges,) rad}: recorded on a path besides positions."""
+        return {"twist": self.twist_of(q)}
+
+    def scales(self):
+        """(length m, force N): the largest extent of the stress-free shape, and
+        EI1_max / length^2 (EI1: bending through the thickness)."""
+        if not self.rods:
+            raise ValueError("the structure has no rods")
+        X = self.reference_positions
+        length = float(np.max(np.ptp(X, axis=0)))
+        if not length > 0.0:
+            length = float(max(np.max(np.abs(X)), 1e-300))
+        EI = max(float(np.max(r.EI1)) for r in self.rods)
+        return length, EI / length**2
+
+    def min_thickness(self) -> float:
+        """The smallest section thickness of any rod, m."""
+        return min(float(np.min(rod.thickness)) for rod in self.rods)
+
+    def supernodes(self):
+        """Node -> representative of the group of nodes that share displacements."""
+        uf = _UnionFind(self.n_nodes)
+        for a, b in self._merges:
+            uf.union(a, b)
+        return np.array([uf.find(i) for i in range(self.n_nodes)], dtype=np.int64)
+
+    def fixed_components(self, rep=None):
+        """(n_nodes, 3) bool: position component held by a support (shared by merged nodes)."""
+        if rep is None:
+            rep = self.supernodes()
+        fixed_rep = np.zeros((self.n_nodes, 3), dtype=bool)
+        for node, comps in self._fixed.items():
+            for c in comps:
+                fixed_rep[rep[node], c] = True
+        return fixed_rep[rep]
+
+    def model(self):
+        """The model arrays of `solver.assembly3d` (cached until the structure changes)."""
+        if self._cache is None:
+            if not self.rods:
+                raise ValueError("the structure has no rods")
+            n_edges = self.n_edges
+            t, d = self.reference_frames()
+            edge_nodes = np.concatenate(self._edge_nodes, axis=0)
+            n_clamps = len(self._clamp_frames)
+            if n_clamps:
+                t = np.concatenate([t, [f[0] for f in self._clamp_frames]])
+                d = np.concatenate([d, [f[1] for f in self._clamp_frames]])
+                edge_nodes = np.concatenate([edge_nodes, -np.ones((n_clamps, 2), np.int64)])
+            stretch = np.concatenate(
+                [np.stack([r.EA, L], axis=1) for r, L in zip(self.rods, self._lengths)])
+            pairs = list(self._pairs.values())
+
+            def frame_index(f):
+                return f if f >= 0 else n_edges + (-1 - f)
+
+            pe = np.array([[frame_index(p[0]), frame_index(p[2])] for p in pairs],
+                          dtype=np.int64).reshape(-1, 2)
+            ps = np.array([[p[1], p[3]] for p in pairs], dtype=float).reshape(-1, 2)
+            pp = np.array([p[4:10] for p in pairs], dtype=float).reshape(-1, 6)
+            self._cache = {
+                "n_nodes": self.n_nodes,
+                "edge_nodes": np.ascontiguousarray(edge_nodes, dtype=np.int64),
+                "src_t": np.ascontiguousarray(t),
+                "src_d": np.ascontiguousarray(d),
+                "stretch_params": np.ascontiguousarray(stretch),
+                "pair_edges": np.ascontiguousarray(pe),
+                "pair_signs": np.ascontiguousarray(ps),
+                "pair_params": np.ascontiguousarray(pp),
+            }
+        return self._cache
+
+    def reduced_system(self, extra_fixed=None) -> RodSystem3D:
+        """A fresh system (reference frames at the stress-free state) with the DOFs ordered
+        by reverse Cuthill–McKee over node groups and edge twists, so that positions and
+        twists interleave along each rod and the band stays narrow.
+
+        ``extra_fixed``: iterable of (node, component 0..2) held in addition to supports."""
+        model = self.model()
+        n, ne = self.n_nodes, self.n_edges
+        rep = self.supernodes()
+        fixed = self.fixed_components(rep)
+        if extra_fixed:
+            for node, c in extra_fixed:
+                fixed[rep == rep[node], c] = True
+        uniq, group = np.unique(rep, return_inverse=True)
+        n_groups = len(uniq) + ne  # node groups, then one group per edge twist
+        group_of_full = np.concatenate([np.repeat(group, 3), len(uniq) + np.arange(ne)])
+        dof_map0 = np.arange(3 * n + ne)
+        from solver.assembly3d import element_dofs3d
+
+        sf, _, pf, _ = element_dofs3d(n, model["edge_nodes"], ne, model["pair_edges"], dof_map0)
+        rows, cols = [], []
+        for full in (sf, pf):
+            if full.shape[0] == 0:
+                continue
+            g = np.where(full >= 0, group_of_full[np.maximum(full, 0)], -1)
+            for i in range(g.shape[1]):
+                for j in range(g.shape[1]):
+                    if i != j:
+                        ok = (g[:, i] >= 0) & (g[:, j] >= 0)
+                        rows.append(g[ok, i])
+                        cols.append(g[ok, j])
+        r = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
+        c = np.concatenate(cols) if cols else np.zeros(0, dtype=np.int64)
+        graph = scipy.sparse.csr_matrix((np.ones(len(r)), (r, c)), shape=(n_groups, n_groups))
+        order = scipy.sparse.csgraph.reverse_cuthill_mckee(graph, symmetric_mode=True)
+
+        free_full = np.concatenate([~fixed.reshape(-1), np.ones(ne, dtype=bool)])
+        # full DOFs of each group, in component order; merged nodes share one set of DOFs
+        group_members = [[] for _ in range(n_groups)]
+        for node in range(n):
+            if rep[node] == node:
+                for k in range(3):
+                    group_members[group[node]].append(3 * node + k)
+        for j in range(ne):
+            group_members[len(uniq) + j].append(3 * n + j)
+        dof_map = -np.ones(3 * n + ne, dtype=np.int64)
+        k = 0
+        for gidx in order:
+            for full in group_members[gidx]:
+                if free_full[full]:
+                    dof_map[full] = k
+                    k += 1
+        # merged nodes take their representative's reduced DOFs
+        node_map = dof_map[: 3 * n].reshape(-1, 3)
+        node_map[:] = node_map[rep]
+        if k == 0:
+            raise ValueError("every degree of freedom is fixed: nothing to solve")
+        bandwidth = 0
+        for full in (sf, pf):
+            if full.shape[0] == 0:
+                continue
+            d = np.where(full >= 0, dof_map[np.maximum(full, 0)], -1)
+            big = np.iinfo(np.int64).max
+            hi = np.max(d, axis=1)
+            lo = np.min(np.where(d < 0, big, d), axis=1)
+            ok = hi >= 0
+            if ok.any():
+                bandwidth = max(bandwidth, int(np.max(hi[ok] - lo[ok])))
+        twist_length = np.concatenate(
+            [np.maximum(r.width, r.thickness) for r in self.rods])
+        return RodSystem3D(model, dof_map, k, bandwidth, twist_length=twist_length)
+
+    # ------------------------------------------------------------------ energy access
+    def state(self, positions=None, twist=None) -> np.ndarray:
+        """A full state vector from positions (n_nodes, 3) m and twists (n_edges,) rad
+        (defaults: the stress-free values)."""
+        q = self.initial_state()
+        if positions is not None:
+            pos = _finite_array(positions, "positions", "m")
+            if pos.shape != (self.n_nodes, 3):
+                raise ValueError(f"positions must have shape ({self.n_nodes}, 3) (m); got "
+                                 f"{pos.shape}")
+            q[: 3 * self.n_nodes] = pos.reshape(-1)
+        if twist is not None:
+            tw = _finite_array(twist, "twist", "rad")
+            if tw.shape != (self.n_edges,):
+                raise ValueError(f"twist must have shape ({self.n_edges},) (rad); got {tw.shape}")
+            q[3 * self.n_nodes:] = tw
+        return q
+
+    def unconstrained_system(self) -> RodSystem3D:
+        """A system with every DOF free and in natural order (for energy checks)."""
+        model = self.model()
+        n_full = 3 * self.n_nodes + self.n_edges
+        return RodSystem3D(model, np.arange(n_full), n_full, n_full - 1)
+
+    def energy(self, q=None) -> float:
+        """Total elastic energy (J) of the full state ``q`` (default: stress free)."""
+        sysm = self.unconstrained_system()
+        return float(sysm.evaluate(self.initial_state() if q is None else np.asarray(q, float)))
+
+    # ------------------------------------------------------------------ experiments
+    def push(self, node, direction=(0.0, 0.0, -1.0), distance=None, method="mgdc", **options):
+        """Push ``node`` along ``direction`` (x, y, z) until its displacement reaches
+        ``distance`` (m), with the planar solver's path followers (`Structure.push`).
+
+        Returns a `solver.continuation.Path`: displacement (K,), force (K,), positions
+        (K, n_nodes, 3), twist (K, n_edges), status, stability counts, critical points."""
+        from solver.continuation import follow_displacement, follow_mgdc, make_control
+
+        control = make_control(self, node, direction, distance, method)
+        if method == "mgdc":
+            return follow_mgdc(self, control, **options)
+        return follow_displacement(self, control, **options)
+
+    def relax(self, q=None, moments=(), tol=1e-10, max_iter=200):
+        """Minimise the energy from the state ``q`` (default stress free) by damped Newton
+        (Levenberg–Marquardt shift when K is indefinite, energy decrease required), with
+        optional dead couples: ``moments`` = [(node_a, node_b, M N m, axis (3,))], each
+        acting on the edge from node_a to node_b, which must turn in the plane normal to the
+        axis. Returns (q, info). The frames are carried along after every step."""
+        from solver.banded import band_to_dense
+
+        q = self.initial_state() if q is None else np.array(q, dtype=float, copy=True)
+        sysm = self.reduced_system()
+        length, fscale = self.scales()
+        loads = []
+        for a, b, M, axis in moments:
+            a = self._check_node(a, "moment node_a")
+            b = self._check_node(b, "moment node_b")
+            ax = _finite_array(axis, "moment axis", "a direction")
+            loads.append((a, b, float(M), ax / np.linalg.norm(ax)))
+
+        def total(qv, with_derivatives):
+            E = sysm.evaluate(qv)
+            g = sysm.grad.copy()
+            K = band_to_dense(sysm.band) if with_derivatives else None
+            for a, b, M, ax in loads:
+                X = self.positions_of(qv)
+                ge = np.empty(3)
+                he = np.empty((3, 3))
+                E += tip_moment_terms(X[b] - X[a], M, ax, ge, he)
+                ra = sysm.dof_map[3 * a: 3 * a + 3]
+                rb = sysm.dof_map[3 * b: 3 * b + 3]
+                for i in range(3):
+                    for s_i, r_i in ((-1.0, ra[i]), (1.0, rb[i])):
+                        if r_i < 0:
+                            continue
+                        g[r_i] += s_i * ge[i]
+                        if with_derivatives:
+                            for j in range(3):
+                                for s_j, r_j in ((-1.0, ra[j]), (1.0, rb[j])):
+                                    if r_j >= 0:
+                                        K[r_i, r_j] += s_i * s_j * he[i, j]
+            return E, g, K
+
+        E, g, K = total(q, True)
+        shift = 0.0
+        it = 0
+        for it in range(1, max_iter + 1):
+            if np.max(np.abs(g)) <= tol * fscale:
+                break
+            while True:
+                eig_min = np.linalg.eigvalsh(K)[0]
+                mu = max(shift, -1.01 * eig_min if eig_min <= 0 else 0.0)
+                du = np.linalg.solve(K + mu * np.eye(K.shape[0]), -g)
+                scale = min(1.0, 0.1 * length / max(float(np.max(np.abs(du))), 1e-300))
+                q_try = q.copy()
+                sysm.increment(q_try, du, scale)
+                E_try, _, _ = total(q_try, False)
+                if E_try <= E + 1e-14 * abs(E) or np.max(np.abs(g)) < 1e-3 * fscale:
+                    break
+                shift = max(4.0 * shift, 1e-6 * float(np.max(np.abs(np.diag(K)))))
+                if shift > 1e12 * float(np.max(np.abs(np.diag(K)))):
+                    raise RuntimeError("relax: no energy decrease along the gradient")
+            shift *= 0.25
+            q = q_try
+            sysm.accept(q)
+            E, g, K = total(q, True)
+        else:
+            raise RuntimeError(f"relax did not converge in {max_iter} iterations")
+        return q, {"iterations": it, "energy": E, "residual": float(np.max(np.abs(g)))}

@@ -1,0 +1,121 @@
+"""`RodSystem3D`: the constrained, assembled 3-D rod problem the path followers work on.
+
+It has the members of the planar `solver.system.ReducedSystem` (docs/problem-interface.md)
+and reuses its banded LDL^T factorisation (inertia count), solves and increments; it owns the
+reference frames, carried from accepted state to accepted state by ``accept(q)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from solver.assembly3d import apply_scaled_increment, assemble_system3d, element_dofs3d
+from solver.frames3d import reference_twist, transport_frames
+from solver.system import ReducedSystem
+
+
+class RodSystem3D(ReducedSystem):
+    """K_red = W^T K W and the reduced gradient of 3-D rods for one set of constraints.
+
+    ``model``: dict of the model arrays of `solver.assembly3d` (copied: the reference frames
+    of a fresh system always start at the structure's stress-free frames); ``dof_map``
+    (3 n_nodes + n_edges,) full -> reduced DOF (-1 held). ``twist_length`` (n_edges,) m:
+    a reduced twist DOF is twist_length * theta, a length like the positions, so that the
+    path followers' step norms and tolerances weigh rotations and displacements alike
+    (default 1: reduced twists in rad).
+    """
+
+    def __init__(self, model, dof_map, n_reduced, bandwidth, twist_length=None):
+        self.n_nodes = int(model["n_nodes"])
+        self.n_edges = int(model["stretch_params"].shape[0])
+        self.edge_nodes = model["edge_nodes"]
+        self.src_t = np.array(model["src_t"], dtype=float, copy=True)
+        self.src_d = np.array(model["src_d"], dtype=float, copy=True)
+        self.stretch_params = model["stretch_params"]
+        self.pair_edges = model["pair_edges"]
+        self.pair_signs = model["pair_signs"]
+        self.pair_params = model["pair_params"]
+        self.dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
+        self.element_dofs = element_dofs3d(self.n_nodes, self.edge_nodes, self.n_edges,
+                                           self.pair_edges, self.dof_map)
+        self.dof_scale = np.ones(self.dof_map.shape[0])
+        if twist_length is not None:
+            self.dof_scale[3 * self.n_nodes:] = 1.0 / np.asarray(twist_length, dtype=float)
+        free = np.flatnonzero(self.dof_map >= 0)
+        self.representative = np.empty(int(n_reduced), dtype=np.int64)
+        self.representative[self.dof_map[free]] = free
+        self.n = int(n_reduced)
+        self.bandwidth = int(bandwidth)
+        self.band = np.zeros((self.bandwidth + 1, max(self.n, 1)))
+        self._band_copy = np.empty_like(self.band)
+        self.grad = np.zeros(max(self.n, 1))
+        self.grad_full = np.zeros(self.dof_map.shape[0])
+        self._zero_correction = np.zeros(max(self.n, 1))
+        self.energy = 0.0
+        self.negative_eigenvalues = 0
+        self.factor_ok = False
+        self._dense_lu = None
+        self._reference_twist = None
+
+    def evaluate(self, q):
+        """Assemble energy (J), gradients (N, N m) and K at the state ``q``."""
+        sf, sr, pf, pr = self.element_dofs
+        self.energy = assemble_system3d(
+            np.ascontiguousarray(q, dtype=float), self.n_nodes, self.edge_nodes, self.src_t,
+            self.src_d, self.stretch_params, self.pair_edges, self.pair_signs,
+            self.pair_params, sf, sr, pf, pr, self.dof_scale, self.band, self.grad,
+            self.grad_full)
+        return self.energy
+
+    def reduced(self, q):
+        """Reduced DOF values of the full state ``q`` (twists times their length)."""
+        rep = self.representative
+        return np.asarray(q)[rep] / self.dof_scale[rep]
+
+    def step_norm(self, q_new, q_old):
+        """Size of a step between two full states in the reduced DOFs' units (m: twists
+        times their length), as the path followers measure it."""
+        return float(np.linalg.norm((np.asarray(q_new) - q_old) / self.dof_scale))
+
+    def increment(self, q, du, scale=1.0):
+        """Apply a reduced increment to the full state in place."""
+        apply_scaled_increment(q, self.dof_map, self.dof_scale, np.asarray(du, dtype=float),
+                               float(scale))
+
+    def fused_newton(self, q, lam, P, tol_force):
+        """No fused kernel for 3-D rods: status 1 sends the driver down the general path."""
+        return 1, np.inf, np.inf
+
+    def fused_mgdc(self, q, lam, P, uP1, tol_force):
+        """No fused kernel for 3-D rods: status 1 sends the driver down the general path."""
+        return 1, np.inf, np.inf, 0.0
+
+    @property
+    def last_correction(self):
+        return self._zero_correction
+
+    def accept(self, q):
+        """Carry the reference frames to the state ``q`` by time-parallel transport (the
+        material frames at q are unchanged: only the source of the transport moves) and
+        record the reference twist of every bending pair of rod edges (rad)."""
+        n3 = 3 * self.n_nodes
+        X = np.asarray(q[:n3]).reshape(-1, 3)
+        en = self.edge_nodes[: self.n_edges]
+        e = X[en[:, 1]] - X[en[:, 0]]
+        t_new = e / np.linalg.norm(e, axis=1)[:, None]
+        self.src_d[: self.n_edges] = transport_frames(self.src_t[: self.n_edges],
+                                                      self.src_d[: self.n_edges], t_new)
+        self.src_t[: self.n_edges] = t_new
+        self._reference_twist = None
+
+    @property
+    def reference_twist(self):
+        """(n_pairs,) rad: the reference twist of every pair of consecutive rod edges at the
+        last accepted state (NaN for pairs with a clamp frame or across a joint)."""
+        if self._reference_twist is None:
+            out = np.full(self.pair_edges.shape[0], np.nan)
+            rods = ((self.pair_edges[:, 0] < self.n_edges) & (self.pair_edges[:, 1] < self.n_edges)
+                    & (self.pair_signs[:, 0] > 0) & (self.pair_signs[:, 1] > 0))
+            out[rods] = reference_twist(self.src_t, self.src_d, self.pair_edges[rods])
+            self._reference_twist = out
+        return self._reference_twist

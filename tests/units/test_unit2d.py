@@ -1,0 +1,112 @@
+"""The 2-D unit (issue 14): square frame, crossing arches, bonds, supports, actuator (no solver
+needed); edge metrics against closed forms; the push when `solver.Structure3D` exists."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from units.frame3d import UnitGeometry
+from units.unit2d import SIDES, build_unit_mesh_2d, edge_metrics
+
+G = UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3)
+
+
+@pytest.fixture(scope="module")
+def unit():
+    return build_unit_mesh_2d(G, nodes=41)
+
+
+def test_square_frame_of_four_strips_jointed_at_the_corners(unit):
+    X = unit.mesh.positions
+    corners = []
+    for name in SIDES:
+        nodes = unit.sides[name]
+        p = X[nodes]
+        assert np.linalg.norm(p[-1] - p[0]) == pytest.approx(G.L)
+        assert np.all(p[:, 2] == 0.0)
+        assert unit.mesh.rod(name).width == pytest.approx(np.full(len(nodes) - 1, G.w))
+        corners.append(p[0])
+        # the midpoint of the side is a node
+        assert np.any(np.all(np.isclose(p, 0.5 * (p[0] + p[-1]), atol=1e-15), axis=1))
+    assert sorted(map(tuple, np.round(corners, 12))) == sorted(
+        [(0, 0, 0), (G.L, 0, 0), (G.L, G.L, 0), (0, G.L, 0)])
+    joints = set(unit.mesh.joints)
+    for a, b in zip(SIDES, SIDES[1:] + SIDES[:1]):
+        assert (int(unit.sides[a][-1]), int(unit.sides[b][0])) in joints
+    for a, b in unit.mesh.joints:
+        assert np.array_equal(X[a], X[b])
+
+
+def test_arches_join_opposite_midpoints_and_cross_bonded_at_the_apex(unit):
+    X = unit.mesh.positions
+    ax, ay = unit.arches["x"], unit.arches["y"]
+    assert X[ax[0]] == pytest.approx([0, 0.5 * G.L, 0]) and X[ax[-1]] == pytest.approx([G.L, 0.5 * G.L, 0])
+    assert X[ay[0]] == pytest.approx([0.5 * G.L, 0, 0]) and X[ay[-1]] == pytest.approx([0.5 * G.L, G.L, 0])
+    assert np.max(X[ax, 2]) == pytest.approx(G.h) and np.max(X[ay, 2]) == pytest.approx(G.h)
+    apex_x = int(ax[np.argmax(X[ax, 2])])
+    apex_y = int(ay[np.argmax(X[ay, 2])])
+    assert apex_x == unit.push_node
+    assert (apex_x, apex_y) in unit.mesh.joints
+    # the arches are the same curve turned by 90 degrees
+    assert np.allclose(X[ax][:, [0, 2]], X[ay][:, [1, 2]])
+    # sinusoid between the flat ends of length b + w/2
+    x0 = G.b + 0.5 * G.w
+    span = G.L - 2 * x0
+    u = X[ax, 0]
+    inside = (u > x0) & (u < G.L - x0)
+    assert np.allclose(X[ax, 2][inside], 0.5 * G.h * (1 - np.cos(2 * np.pi * (u[inside] - x0) / span)))
+    assert np.all(X[ax, 2][~inside] == 0.0)
+    # feet rigidly jointed to the side midpoints, which carry the supports
+    feet = {int(ax[0]), int(ax[-1]), int(ay[0]), int(ay[-1])}
+    jointed = {a for a, b in unit.mesh.joints} | {b for a, b in unit.mesh.joints}
+    assert feet <= jointed
+    z_fixed = sorted(n for n, c in unit.mesh.fixes if c == "z")
+    assert sorted(unit.supports.tolist()) == z_fixed
+    assert np.allclose(sorted(map(tuple, np.round(X[z_fixed], 12))), sorted(
+        [(0.5 * G.L, 0, 0), (G.L, 0.5 * G.L, 0), (0.5 * G.L, G.L, 0), (0, 0.5 * G.L, 0)]))
+
+
+def test_actuator_moves_both_arches_near_the_apex_as_one(unit):
+    X = unit.mesh.positions
+    (group,) = unit.mesh.rigid
+    assert unit.push_node in group and (unit.push_node, "xy") in unit.mesh.fixes
+    centre = np.array([0.5 * G.L, 0.5 * G.L, G.h])
+    members_x = [n for n in group if n in set(unit.arches["x"].tolist())]
+    members_y = [n for n in group if n in set(unit.arches["y"].tolist())]
+    assert len(members_x) >= 3 and len(members_y) >= 2
+    assert np.max(np.linalg.norm(X[group] - centre, axis=1)) < G.joint_length
+
+
+def test_mesh_has_the_square_symmetry():
+    m = build_unit_mesh_2d(G, nodes=31)
+    X = m.mesh.positions
+    c = np.array([0.5 * G.L, 0.5 * G.L, 0])
+    rot = (X - c) @ np.array([[0, 1, 0], [-1, 0, 0], [0, 0, 1]]) + c  # quarter turn
+    key = {tuple(np.round(p, 12)) for p in X}
+    assert all(tuple(np.round(p, 12)) in key for p in rot)
+
+
+def test_edge_metrics_of_a_circular_arc():
+    R, phi = 0.08, math.radians(60)
+    a = np.linspace(-phi / 2, phi / 2, 401)
+    pts = np.stack([R * np.sin(a), 0.0 * a, R * (1 - np.cos(a))], 1)
+    m = edge_metrics(pts)
+    assert m["S"] == pytest.approx(2 * R * math.sin(phi / 2))
+    assert m["arc_length"] == pytest.approx(R * phi, rel=1e-5)
+    assert m["theta_deg"] == pytest.approx(60.0 * 399 / 400, rel=1e-12)
+    assert m["curvature"] == pytest.approx(1 / R, rel=3e-3)
+    assert m["sag"] == pytest.approx(R * (1 - math.cos(phi / 2)))
+    flat = edge_metrics(np.stack([np.linspace(0, 1, 5), 0 * np.ones(5), np.zeros(5)], 1))
+    assert flat["theta_deg"] == 0.0 and flat["curvature"] == 0.0
+
+
+@pytest.mark.parametrize("g, kwargs, name", [
+    (UnitGeometry(L=0.1, h=0.0, t=0.5e-3, w=5e-3), {}, "h"),
+    (G, dict(nodes=5), "nodes"), (G, dict(nodes=True), "nodes"), (G, dict(nu=-1.5), "nu"),
+])
+def test_bad_input_names_the_parameter(g, kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        build_unit_mesh_2d(g, **kwargs)

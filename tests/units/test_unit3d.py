@@ -1,0 +1,224 @@
+"""The 3-D unit (issue 14): mesh topology, widths, bonds, supports and imperfections (no solver
+needed), metrics against closed forms, and — when `solver.Structure3D` exists — the push."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from units.frame3d import UnitGeometry, end_tangent_angle
+from units.unit3d import (
+    arch_lean_deg,
+    build_unit_mesh_3d,
+    section_rotation_deg,
+)
+
+MM = 1e-3
+SPECIMEN = UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3)
+
+
+def _rods_crossing(mesh, x, exclude=("arch",)):
+    """Rods along x whose span covers abscissa x (bars excluded), with their edge width."""
+    out = []
+    for r in mesh.rods:
+        if r.name in exclude or r.name.startswith("bar"):
+            continue
+        xs = r.xyz[:, 0]
+        lo, hi = np.minimum(xs[:-1], xs[1:]), np.maximum(xs[:-1], xs[1:])
+        k = np.nonzero((lo < x) & (x < hi))[0]
+        if len(k):
+            out.append((r.name, float(r.width[k[0]]), float(r.xyz[k[0], 1])))
+    return out
+
+
+@pytest.fixture(scope="module")
+def unit():
+    return build_unit_mesh_3d(SPECIMEN, nodes=101)
+
+
+def test_frame_widths_solid_ends_and_hollow_middle(unit):
+    g = SPECIMEN
+    mesh = unit.mesh
+    for x in (0.23 * g.flat_length, 0.71 * g.flat_length, g.L - 0.47 * g.flat_length):
+        rods = _rods_crossing(mesh, x)
+        assert sum(w for _, w, _ in rods) == pytest.approx(4 * g.w)
+        # together they tile [-2w, 2w] without overlap
+        spans = sorted((y - 0.5 * w, y + 0.5 * w) for _, w, y in rods)
+        assert spans[0][0] == pytest.approx(-2 * g.w) and spans[-1][1] == pytest.approx(2 * g.w)
+        for a, b in zip(spans[:-1], spans[1:]):
+            assert a[1] == pytest.approx(b[0])
+    for x in (0.3037 * g.L, 0.5 * g.L - 1e-4, 0.8037 * g.L):
+        rods = _rods_crossing(mesh, x)
+        assert sorted(n for n, _, _ in rods) == ["rail_left", "rail_right"]
+        assert sum(w for _, w, _ in rods) == pytest.approx(2 * g.w)
+        assert sorted(y for _, _, y in rods) == pytest.approx([-1.5 * g.w, 1.5 * g.w])
+
+
+def test_cross_bars_stand_for_the_end_plates_length(unit):
+    g = SPECIMEN
+    bars = [r for r in unit.mesh.rods if r.name.startswith("bar_left")]
+    widths = np.array([r.width[0] for r in bars])
+    xs = np.array([r.xyz[0, 0] for r in bars])
+    # every bar but the one closing the bonded edge (half an edge past x0) covers plate
+    assert np.sum(widths[xs < g.flat_length]) == pytest.approx(g.flat_length)
+    assert xs[-1] > g.flat_length
+    for r in bars:  # across the whole width, along y
+        assert r.xyz[0, 1] == pytest.approx(-1.5 * g.w) and r.xyz[-1, 1] == pytest.approx(1.5 * g.w)
+        assert np.ptp(r.xyz[:, 0]) == 0.0 and np.all(np.diff(r.xyz[:, 1]) > 0)
+
+
+def test_joints_join_coincident_nodes_and_connect_everything(unit):
+    mesh = unit.mesh
+    X = mesh.positions
+    for a, b in mesh.joints + mesh.ties:
+        assert a != b
+        assert np.array_equal(X[a], X[b])  # bit-identical coordinates
+    # one connected assembly (rods through their edges, joints between rods)
+    parent = list(range(mesh.n_nodes))
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    pairs = list(mesh.joints)
+    for r in mesh.rods:
+        pairs += list(zip(r.nodes[:-1], r.nodes[1:]))
+    for a, b in pairs:
+        parent[find(int(a))] = find(int(b))
+    assert len({find(i) for i in range(mesh.n_nodes)}) == 1
+    # every bar is jointed at both rails and at the centre strip
+    names = {int(n): r.name for r in mesh.rods for n in r.nodes}
+    for r in mesh.rods:
+        if r.name.startswith("bar"):
+            partners = sorted(names[b if a in r.nodes else a] for a, b in mesh.joints
+                              if a in r.nodes or b in r.nodes)
+            side = "left" if "left" in r.name else "right"
+            assert partners == sorted(["rail_left", "rail_right", f"centre_{side}"])
+
+
+def test_arch_bonded_over_end_regions_and_raised_through_the_hole(unit):
+    g = SPECIMEN
+    mesh = unit.mesh
+    X = mesh.positions
+    arch = unit.arch
+    names = {int(n): r.name for r in mesh.rods for n in r.nodes}
+    bonded = sorted(int(a) for a, b in mesh.joints if names[int(a)] == "arch")
+    xa = X[bonded, 0]
+    xa_left = np.sort(xa[xa < 0.5 * g.L])
+    # bonded from the end to half an edge past x0; x0 is the midpoint of the last bonded edge
+    assert xa_left[0] == 0.0
+    assert 0.5 * (xa_left[-1] + xa_left[-2]) == pytest.approx(g.flat_length)
+    assert len(bonded) == 2 * len(xa_left)
+    raised = X[arch][(X[arch, 0] > xa_left[-1]) & (X[arch, 0] < g.L - xa_left[-1])]
+    assert np.allclose(raised[:, 2], g.arch_z(raised[:, 0]), atol=1e-12)
+    assert np.all(raised[:, 1] == 0.0)
+    assert np.max(X[arch, 2]) == pytest.approx(g.h)
+    assert mesh.rod("arch").width == pytest.approx(np.full(len(arch) - 1, g.w))
+    # the arch passes through the hole: its raised part is between the rails' inner edges
+    assert np.all(np.abs(X[arch, 1]) + 0.5 * g.w <= 1.0 * g.w + 1e-15)
+
+
+def test_rollers_hold_z_along_a_line_across_the_width(unit):
+    g = SPECIMEN
+    X = unit.mesh.positions
+    fixed = {}
+    for n, comps in unit.mesh.fixes:
+        fixed.setdefault(n, set()).update(comps)
+    z_fixed = np.array([n for n, c in fixed.items() if c == {"z"}])
+    xs = np.unique(np.round(X[z_fixed, 0], 12))
+    assert xs == pytest.approx([0.03 * g.L, 0.97 * g.L])
+    for x in xs:  # every base node on the line x = 0.03 L
+        on_line = np.nonzero((np.abs(X[:, 0] - x) < 1e-12) & (X[:, 2] == 0))[0]
+        on_line = [n for n in on_line if n not in unit.arch]
+        assert set(on_line) <= set(z_fixed.tolist())
+        assert np.ptp(X[on_line, 1]) == pytest.approx(4 * g.w - g.w)
+
+
+def test_actuator_is_a_rigid_segment_of_the_joint_length(unit):
+    g = SPECIMEN
+    X = unit.mesh.positions
+    assert len(unit.mesh.rigid) == 1
+    group = unit.mesh.rigid[0]
+    assert unit.push_node in group
+    assert X[unit.push_node] == pytest.approx([0.5 * g.L, 0.0, g.h])
+    assert (unit.push_node, "xy") in unit.mesh.fixes
+    # the group spans the joint plus half a straddling edge at each end (arc length)
+    seg = X[group]
+    arc = np.sum(np.linalg.norm(np.diff(seg, axis=0), axis=1))
+    edge = np.linalg.norm(seg[1] - seg[0])
+    assert arc == pytest.approx(g.joint_length + edge, rel=0.02)
+    assert np.allclose(seg[:, 0] - 0.5 * g.L, -(seg[::-1, 0] - 0.5 * g.L))
+
+
+def test_mesh_is_mirror_symmetric_and_reproducible(unit):
+    g = SPECIMEN
+    X = unit.mesh.positions
+    mirrored = X * [-1, 1, 1] + [g.L, 0, 0]
+    key = {tuple(np.round(p, 12)) for p in X}
+    assert all(tuple(np.round(p, 12)) in key for p in mirrored)
+    again = build_unit_mesh_3d(SPECIMEN, nodes=101)
+    assert np.array_equal(again.mesh.positions, X)
+    assert again.mesh.joints == unit.mesh.joints and again.mesh.fixes == unit.mesh.fixes
+
+
+def test_tilt_rotates_the_raised_arch_about_the_base_axis():
+    g = SPECIMEN
+    m = build_unit_mesh_3d(g, nodes=61, tilt_deg=5.0)
+    X = m.mesh.positions[m.arch]
+    top = X[np.argmax(np.hypot(X[:, 1], X[:, 2]))]
+    assert math.degrees(math.atan2(top[1], top[2])) == pytest.approx(5.0)
+    assert np.hypot(top[1], top[2]) == pytest.approx(g.h)
+    n_end = len(m.mesh.groups["centre_left"])  # bonded nodes at each end (flat)
+    raised = slice(n_end, len(X) - n_end)
+    assert np.allclose(np.hypot(X[raised, 1], X[raised, 2]), g.arch_z(X[raised, 0]), atol=1e-12)
+    flat = X[:, 0] <= g.flat_length
+    assert np.all(X[flat, 1:] == 0.0)
+    # and the lean metric reads it back
+    foot = int(np.count_nonzero(m.mesh.groups["centre_left"] >= 0)) - 1
+    idx = int(np.nonzero(m.arch == m.push_node)[0][0])
+    assert arch_lean_deg(X, idx, foot, len(X) - 1 - foot) == pytest.approx(5.0)
+
+
+def test_apex_offset_and_actuator_offset():
+    g = SPECIMEN
+    m = build_unit_mesh_3d(g, nodes=61, apex_offset=1.5 * MM)
+    X = m.mesh.positions
+    assert X[m.push_node] == pytest.approx([0.5 * g.L, 1.5 * MM, g.h])
+    assert np.allclose(X[m.arch, 1], 1.5 * MM * X[m.arch, 2] / g.h)
+    m = build_unit_mesh_3d(g, nodes=61, actuator_offset=4 * MM)
+    X = m.mesh.positions
+    assert X[m.push_node, 0] == pytest.approx(0.5 * g.L + 4 * MM)
+    assert X[m.push_node, 2] == pytest.approx(g.arch_z(0.5 * g.L + 4 * MM))
+    assert m.push_node in m.mesh.rigid[0]
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(tilt_deg=60.0), "tilt_deg"), (dict(tilt_deg="x"), "tilt_deg"),
+    (dict(tilt_deg=float("nan")), "tilt_deg"), (dict(apex_offset=0.05), "apex_offset"),
+    (dict(actuator_offset=0.03), "actuator_offset"), (dict(nodes=10), "nodes"),
+    (dict(nodes=50.5), "nodes"), (dict(nu=0.7), "nu"), (dict(bar_divisions=0), "bar_divisions"),
+])
+def test_bad_input_names_the_parameter(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        build_unit_mesh_3d(SPECIMEN, **kwargs)
+
+
+def test_section_rotation_and_end_tangent_angle_closed_forms():
+    # a base line bent into a circular arc of angle phi rising at both ends: theta = phi
+    R, phi = 0.05, math.radians(80)
+    a = np.linspace(-phi / 2, phi / 2, 201)
+    pts = np.stack([R * np.sin(a), np.zeros_like(a), R * (1 - np.cos(a))], 1)
+    # (edge directions are the tangents at the edge midpoints, as in the planar unit)
+    assert end_tangent_angle(pts) == pytest.approx(80.0 * 199 / 200, rel=1e-12)
+    assert end_tangent_angle(pts * [1, 1, -1]) == pytest.approx(-80.0 * 199 / 200, rel=1e-12)
+    turned = pts @ np.array([[0.6, 0.8, 0], [-0.8, 0.6, 0], [0, 0, 1]])  # any heading
+    assert end_tangent_angle(turned) == pytest.approx(80.0 * 199 / 200, rel=1e-12)
+    # rails at y = -/+ 7.5 mm, the right one lifted by 7.5 tan(3 deg) * 2
+    x = np.linspace(0, 0.1, 5)
+    left = np.stack([x, -7.5e-3 + 0 * x, 0 * x], 1)
+    right = np.stack([x, 7.5e-3 + 0 * x, 15e-3 * math.tan(math.radians(3)) + 0 * x], 1)
+    assert section_rotation_deg(left, right) == pytest.approx(np.full(5, 3.0))

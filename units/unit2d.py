@@ -1,0 +1,322 @@
+"""The paper's 2-D unit (its Fig. 9a-b, "left for future work"): a square frame base of side L
+made of strips of width w, and two arches joining opposite midpoints of the square's sides,
+crossing (and bonded) at the apex, pushed down at the apex. On `solver.Structure3D`.
+
+    >>> from units.unit2d import simulate_unit_2d
+    >>> r = simulate_unit_2d(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3))
+    >>> r.bistable, r.F_cr, r.edges["iii"]   # per edge: S, theta, mean curvature
+
+Model (x, y in the base plane, z up; SI units; docs/unit3d.md):
+- frame: four rods along the sides of the square [0, L]^2 (centrelines), width w, thickness
+  t, rigidly jointed at the corners; a node at each side's midpoint;
+- arches: "x" along y = L/2 from x = 0 to L, "y" along x = L/2; each flat over its first and
+  last b + w/2 (across the frame strip and the extra flat length b), sinusoidal in between,
+  apex h at the centre; each end rigidly jointed to the side's midpoint node (the glued
+  overlap of the two strips is w x w, which a rigid joint represents); the two apex nodes are
+  rigidly jointed (bonded where the arches cross);
+- actuator: the nodes of both arches within ``joint_length`` of the apex move as one, the
+  apex cannot move in x or y, and it is pushed down (-z);
+- supports: z held at the four side midpoints, under the arch feet (the analogue of the
+  planar unit's rollers next to the bonds).
+Metrics of each side ("south" y = 0, "east" x = L, "north" y = L, "west" x = 0) in a state:
+the chord S between its corners, theta (signed angle between its end tangents in its
+vertical plane, > 0 when the corners rise above the middle, as the planar unit's theta) and
+the mean curvature theta / arc length (1/m).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from units.frame3d import (
+    JOINT_LENGTH_DEFAULT,
+    PETG_NU,
+    Mesh3D,
+    UnitGeometry,
+    arch_nodes_x,
+    arch_profile,
+    end_tangent_angle,
+    segment_points,
+)
+from units.push3d import push_through
+
+__all__ = ["Unit2DModel", "Unit2DResult", "build_unit_mesh_2d", "build_unit_2d",
+           "simulate_unit_2d", "edge_metrics", "DEFAULT_NODES_2D", "SIDES"]
+
+#: default resolution: nodes along one side of the square
+DEFAULT_NODES_2D = 41
+SIDES = ("south", "east", "north", "west")
+NAN = float("nan")
+
+
+@dataclass
+class Unit2DModel:
+    """A meshed 2-D unit: the mesh, the structure (None until built) and named nodes."""
+
+    mesh: Mesh3D
+    structure: object
+    push_node: int
+    sides: dict  # side name -> node indices, corner to corner
+    arches: dict  # "x", "y" -> node indices
+    supports: np.ndarray
+
+
+def _flat_2d(g):
+    return g.b + 0.5 * g.w
+
+
+def check_geometry_2d(g: UnitGeometry):
+    """Extra limits of the 2-D unit (its flat arch ends are b + w/2 long)."""
+    if not isinstance(g, UnitGeometry):
+        raise ValueError(f"g must be a UnitGeometry; got {type(g).__name__}")
+    if g.h <= 0:
+        raise ValueError("h (arch apex height, m) must be > 0 for a 2-D unit; got 0")
+    span = g.L - 2 * _flat_2d(g)
+    if g.h > span:
+        raise ValueError(f"h (arch apex height, m) must be <= the arch span L - 2 b - w = "
+                         f"{span:.6g} m; got {g.h:.6g} m")
+
+
+def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float = PETG_NU,
+                       actuator: bool = True, supports: bool = True) -> Unit2DModel:
+    """Mesh the 2-D unit (no solver needed). ``nodes``: nodes along one side (odd is not
+    required: each side always has a node at its midpoint)."""
+    check_geometry_2d(g)
+    if isinstance(nodes, bool) or not isinstance(nodes, (int, np.integer)) or not 11 <= nodes <= 1001:
+        raise ValueError(f"nodes (resolution: nodes along a side) must be an integer in "
+                         f"[11, 1001]; got {nodes!r}")
+    nu = float(nu)
+    if not -1.0 < nu <= 0.5:
+        raise ValueError(f"nu (Poisson's ratio) must be in (-1, 0.5]; got {nu!r}")
+    L, w, t = g.L, g.w, g.t
+    spacing = L / (int(nodes) - 1)
+    half = segment_points(np.array([0.0, 0.5 * L]), spacing)
+    s = np.concatenate([half, L - half[::-1][1:]])  # symmetric, midpoint a node
+    mid = len(half) - 1
+    z = np.zeros_like(s)
+    mesh = Mesh3D(E=g.E, nu=nu)
+    sides = {
+        "south": mesh.add_rod("south", np.stack([s, z, z], 1), w, t),
+        "east": mesh.add_rod("east", np.stack([z + L, s, z], 1), w, t),
+        "north": mesh.add_rod("north", np.stack([L - s, z + L, z], 1), w, t),
+        "west": mesh.add_rod("west", np.stack([z, L - s, z], 1), w, t),
+    }
+    order = list(SIDES)
+    for a, b in zip(order, order[1:] + order[:1]):  # corners
+        mesh.bond(sides[a][-1], sides[b][0])
+
+    x0 = _flat_2d(g)
+    span = L - 2 * x0
+    jl = float(getattr(g, "joint_length", JOINT_LENGTH_DEFAULT))
+    flat = segment_points(np.array([0.0, x0]), spacing)
+    raised, act, (lo, hi) = arch_nodes_x(x0, L - x0, x0, span, g.h, spacing, 0.5 * L, jl)
+    u = np.concatenate([flat[:-1], raised, L - flat[:-1][::-1]])
+    zz = arch_profile(u, x0, span, g.h)
+    c = np.full_like(u, 0.5 * L)
+    arches = {
+        "x": mesh.add_rod("arch_x", np.stack([u, c, zz], 1), w, t),
+        "y": mesh.add_rod("arch_y", np.stack([c, u, zz], 1), w, t),
+    }
+    k_apex = len(flat) - 1 + act
+    apex_x, apex_y = int(arches["x"][k_apex]), int(arches["y"][k_apex])
+    mesh.bond(apex_x, apex_y)
+    # arch feet on the side midpoints: x arch on west (start) and east (end), y arch on south
+    # (start) and north (end)
+    feet = [(arches["x"][0], sides["west"][mid]), (arches["x"][-1], sides["east"][mid]),
+            (arches["y"][0], sides["south"][mid]), (arches["y"][-1], sides["north"][mid])]
+    for a, b in feet:
+        mesh.bond(a, b)
+    support = np.array([int(sides[n][mid]) for n in SIDES], dtype=np.int64)
+    ring = slice(len(flat) - 1 + lo, len(flat) - 1 + hi)
+    if actuator:
+        group = [int(n) for n in arches["x"][ring]]
+        group += [int(n) for n in arches["y"][ring] if int(n) != apex_y]
+        mesh.rigid.append(group)
+        mesh.fixes.append((apex_x, "xy"))
+    if supports:
+        for n in support:
+            mesh.fixes.append((int(n), "z"))
+    mesh.named.update(push=apex_x, apex_y=apex_y)
+    mesh.groups.update({f"side_{k}": v for k, v in sides.items()})
+    mesh.groups.update(arch_x=arches["x"], arch_y=arches["y"], supports=support)
+    return Unit2DModel(mesh, None, apex_x, sides, arches, support)
+
+
+def build_unit_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, **options) -> Unit2DModel:
+    """Mesh the 2-D unit and build its `solver.Structure3D`."""
+    model = build_unit_mesh_2d(g, nodes=nodes, **options)
+    model.structure = model.mesh.to_structure()
+    return model
+
+
+def edge_metrics(points) -> dict:
+    """S (chord between the corners, m), theta (degrees, > 0 when the corners rise above the
+    middle), arc length (m), mean curvature theta / arc length (1/m) and the sag of the
+    midpoint below the chord (m, > 0 when the middle is lower) of one side (n, 3)."""
+    p = np.asarray(points, dtype=float)
+    chord = p[-1] - p[0]
+    S = float(np.linalg.norm(chord))
+    arc = float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)))
+    theta = end_tangent_angle(p)
+    m = p[len(p) // 2]
+    sag = float(0.5 * (p[0, 2] + p[-1, 2]) - m[2])
+    return {"S": S, "theta_deg": theta, "arc_length": arc,
+            "curvature": math.radians(theta) / arc, "sag": sag}
+
+
+@dataclass
+class Unit2DResult:
+    """Metrics of the 2-D unit (SI; NaN where absent): F_cr, d_cr, d_unstable, d_second,
+    bistable as the planar unit; ``edges[state][side]`` = `edge_metrics` of each side;
+    ``shapes[state]`` = {side or "arch_x"/"arch_y": (n, 3) positions}."""
+
+    geometry: UnitGeometry
+    status: str
+    bistable: bool = False
+    F_cr: float = NAN
+    d_cr: float = NAN
+    d_unstable: float = NAN
+    d_second: float = NAN
+    edges: dict = field(default_factory=dict)
+    curve: tuple = (np.zeros(0), np.zeros(0))
+    shapes: dict = field(default_factory=dict)
+    path_status: str = ""
+    exact_states: bool = False
+    solve_time: float = NAN
+    n_nodes: int = 0
+
+    @property
+    def theta_deg(self) -> float:
+        """Mean over the four sides of theta in state (iii), degrees (NaN if absent)."""
+        e = self.edges.get("iii")
+        return float(np.mean([e[s]["theta_deg"] for s in SIDES])) if e else NAN
+
+    @property
+    def curvature(self) -> float:
+        """Mean over the four sides of the mean curvature in state (iii), 1/m."""
+        e = self.edges.get("iii")
+        return float(np.mean([e[s]["curvature"] for s in SIDES])) if e else NAN
+
+    @property
+    def S(self) -> float:
+        """Mean over the four sides of the corner-to-corner chord in state (iii), m."""
+        e = self.edges.get("iii")
+        return float(np.mean([e[s]["S"] for s in SIDES])) if e else NAN
+
+    def summary(self) -> dict:
+        out = {k: getattr(self, k) for k in ("status", "bistable", "F_cr", "d_cr",
+                                             "d_unstable", "d_second", "S", "theta_deg",
+                                             "curvature", "solve_time", "n_nodes")}
+        for side, m in self.edges.get("iii", {}).items():
+            for k, v in m.items():
+                out[f"{side}_{k}"] = v
+        return out
+
+
+def simulate_unit_2d(g: UnitGeometry, nodes: int | None = None, nu: float = PETG_NU,
+                     steps: int = 60, critical: bool = False) -> Unit2DResult:
+    """Push the 2-D unit's apex down until it snaps; F_cr, the d's and each side's S, theta
+    and curvature in the second stable state. Failures come back in ``status``."""
+    nodes = DEFAULT_NODES_2D if nodes is None else nodes
+    t0 = time.perf_counter()
+    model = build_unit_2d(g, nodes=nodes, nu=nu)
+    out = push_through(model.structure, model.push_node, 3.0 * g.h, steps=steps,
+                       critical=critical)
+    r = Unit2DResult(g, out.status, bistable=out.bistable, F_cr=out.F_cr, d_cr=out.d_cr,
+                     d_unstable=out.d_unstable, d_second=out.d_second, curve=out.curve,
+                     path_status=out.path_status, exact_states=out.exact_states)
+    states = dict(out.states)
+    states["0"] = model.mesh.positions
+    for state, pos in states.items():
+        pos = np.asarray(pos)
+        r.shapes[state] = {side: pos[n] for side, n in model.sides.items()}
+        r.shapes[state].update(arch_x=pos[model.arches["x"]], arch_y=pos[model.arches["y"]])
+        r.shapes[state]["rods"] = {rod.name: pos[rod.nodes] for rod in model.mesh.rods}
+        r.edges[state] = {side: edge_metrics(pos[n]) for side, n in model.sides.items()}
+    r.solve_time = time.perf_counter() - t0
+    r.n_nodes = model.mesh.n_nodes
+    return r
+
+
+# ---------------------------------------------------------------------------------------------
+# The 2-D unit as a point solver of the design-map pipeline (`pipeline.solvers`, kind "unit2d")
+
+#: status codes of a 2-D unit map point
+MAP_STATUS = {0: "ok", 1: "monostable", 2: "not_converged", 3: "invalid_geometry", 4: "timeout"}
+
+
+def solve_map_point(h_over_L, t_over_L, w_over_L=0.05, b_over_L=0.0, resolution=DEFAULT_NODES_2D,
+                    time_limit=None) -> dict:
+    """One point of the 2-D unit's map, dimensionless (L = 0.1 m, E = PETG; the results are
+    scale free): F_cr L^2 / (E I) with I = w t^3 / 12, d / L, and in state (iii) the mean over
+    the sides of S / L, theta (deg) and curvature x L, and the largest difference of theta
+    between sides (deg; 0 for a symmetric second state). Never raises."""
+    L = 0.1
+    rec = {"status": 2, "message": ""}
+    try:
+        g = UnitGeometry(L=L, h=h_over_L * L, t=t_over_L * L, w=w_over_L * L, b=b_over_L * L)
+        check_geometry_2d(g)
+    except ValueError as exc:
+        return {"status": 3, "message": str(exc)}
+    try:
+        r = simulate_unit_2d(g, nodes=int(resolution))
+    except Exception as exc:  # noqa: BLE001 - a map point never raises
+        return {"status": 2, "message": f"{type(exc).__name__}: {exc}"}
+    EI = g.E * g.w * g.t**3 / 12.0
+    rec.update(F_cr=r.F_cr * L**2 / EI, d_cr=r.d_cr / L, d_unstable=r.d_unstable / L,
+               d_second=r.d_second / L, S=r.S / L, theta=r.theta_deg,
+               curvature=r.curvature * L, message=r.status if r.status != "ok" else "")
+    e = r.edges.get("iii")
+    rec["theta_spread"] = (max(v["theta_deg"] for v in e.values())
+                           - min(v["theta_deg"] for v in e.values())) if e else math.nan
+    rec["status"] = 0 if r.status == "ok" else (1 if r.status == "monostable" else 2)
+    return rec
+
+
+def _map_presets():
+    from pipeline.solvers import MapGrid
+
+    return {
+        "small": MapGrid({"h_over_L": (0.1, 0.15, 0.2, 0.25, 0.3),
+                          "t_over_L": (0.004, 0.005, 0.0065, 0.0075)}, name="small"),
+        "ci": MapGrid({"h_over_L": (0.15, 0.25), "t_over_L": (0.005, 0.0075)}, name="ci"),
+    }
+
+
+def _map_spec():
+    from pipeline.solvers import SolverSpec
+
+    return SolverSpec(
+        name="unit2d",
+        solve="units.unit2d:solve_map_point",
+        dims=("h_over_L", "t_over_L"),
+        float_vars={
+            "F_cr": ("1", "critical force before snap through, F_cr L^2 / (E w t^3 / 12)"),
+            "d_cr": ("1", "apex displacement at F_cr, d_cr / L"),
+            "d_unstable": ("1", "apex displacement of the unstable state (ii), d / L"),
+            "d_second": ("1", "apex displacement of the second stable state (iii), d / L"),
+            "S": ("1", "corner-to-corner chord of a side in state (iii), mean of the four, S / L"),
+            "theta": ("degree", "angle between the end tangents of a side in state (iii), mean"),
+            "curvature": ("1", "mean curvature of a side in state (iii) times L, mean of the four"),
+            "theta_spread": ("degree", "largest difference of theta between the sides in (iii)"),
+        },
+        status_codes=dict(MAP_STATUS),
+        failure_statuses=("not_converged", "timeout", "invalid_geometry"),
+        required_when_ok=("F_cr", "d_cr", "d_unstable", "d_second", "S", "theta", "curvature"),
+        options={"w_over_L": 0.05, "b_over_L": 0.0, "resolution": DEFAULT_NODES_2D},
+        presets=_map_presets(),
+        sources=("solver", "units.unit2d", "units.frame3d", "units.push3d"),
+        title="snapmorph map of the 2-D unit (square frame, two crossing arches)",
+    )
+
+
+def __getattr__(name):  # MAP_SPEC built on first use: pipeline is imported only then
+    if name == "MAP_SPEC":
+        spec = _map_spec()
+        globals()["MAP_SPEC"] = spec
+        return spec
+    raise AttributeError(name)

@@ -1,0 +1,390 @@
+"""The bistable unit in 3-D: a rectangular frame base, the arch through its hole, and the
+imperfections the paper saw (issue 14), on the 3-D discrete elastic rods of `solver.Structure3D`.
+
+    >>> from units.unit3d import simulate_unit_3d
+    >>> from solver.unit_model import UnitGeometry
+    >>> r = simulate_unit_3d(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3), tilt_deg=2)
+    >>> r.F_cr, r.theta_deg, r.arch_tilt_deg, r.rail_twist_deg
+
+Geometry (x along the base, y across it, z up; `../shared/unit-model.md`, docs/unit3d.md):
+- the base is a frame of outer width 4w: two side rails of width w (centrelines y = ±1.5 w)
+  along the whole length, and two solid end regions 0 <= x <= b + w (and mirrored) of width 4w.
+  An end region is a grid: the rails, a centre strip of width 2w (y = 0) and cross bars along y
+  at every node of the end region (each as wide, in x, as the length of plate it stands for),
+  rigidly jointed where they cross. The hollow middle is the two rails only.
+- the arch, a strip of width w on the centre line, flat on the end regions and bonded there
+  (rigid joints between coincident arch and centre-strip nodes), sinusoidal through the hole.
+- rollers: z held along the line x = 0.03 L across the whole width (and mirrored);
+- actuator: the arch nodes within ``joint_length`` around the push point move as one
+  (`Structure3D.rigid`), and the push point cannot move in x or y.
+As in the planar unit (docs/model-notes.md, note 1), the arch leaves the base at x0 = b + w,
+the midpoint of an edge of the rails, the centre strip and the arch, so that the composite
+(bonded) region ends exactly at x0 in the DER sense.
+
+Imperfections: ``tilt_deg`` rotates the raised arch about the base's axis (x) toward +y;
+``apex_offset`` (m) shifts the arch sideways by apex_offset * z(x) / h (a lateral bow, apex
+moved by apex_offset); ``actuator_offset`` (m) glues and pushes the actuator that far along x
+from mid-span.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from units.frame3d import (
+    JOINT_LENGTH_DEFAULT,
+    PETG_NU,
+    SUPPORT_OFFSET,
+    Mesh3D,
+    UnitGeometry,
+    arch_nodes_x,
+    arch_profile,
+    end_tangent_angle,
+    segment_points,
+)
+from units.push3d import PushOutcome, push_through
+
+__all__ = ["Unit3DModel", "Unit3DResult", "build_unit_mesh_3d", "build_unit_3d",
+           "simulate_unit_3d", "DEFAULT_NODES_3D"]
+
+#: default resolution of the 3-D unit (about the number of nodes along a rail)
+DEFAULT_NODES_3D = 101
+NAN = float("nan")
+
+
+@dataclass
+class Unit3DModel:
+    """A meshed 3-D unit: the mesh, the structure (None until built) and its named nodes."""
+
+    mesh: Mesh3D
+    structure: object
+    push_node: int
+    rail_left: np.ndarray  # y = -1.5 w
+    rail_right: np.ndarray  # y = +1.5 w
+    arch: np.ndarray
+    supports: np.ndarray
+
+
+def _check_imperfections(tilt_deg, apex_offset, actuator_offset, g):
+    def real(name, value, unit, meaning):
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} ({meaning}, {unit}) must be a number; got {value!r}") from None
+        if isinstance(value, bool) or not math.isfinite(v):
+            raise ValueError(f"{name} ({meaning}, {unit}) must be a finite number; got {value!r}")
+        return v
+
+    tilt = real("tilt_deg", tilt_deg, "degrees", "arch tilt about the base axis")
+    if not -45.0 <= tilt <= 45.0:
+        raise ValueError(f"tilt_deg (arch tilt about the base axis, degrees) must be in "
+                         f"[-45, 45]; got {tilt!r}")
+    dy = real("apex_offset", apex_offset, "m", "sideways offset of the apex")
+    if abs(dy) > g.h:
+        raise ValueError(f"apex_offset (sideways offset of the apex, m) must be within "
+                         f"[-h, h] = [{-g.h:.6g}, {g.h:.6g}] m; got {dy!r}")
+    dx = real("actuator_offset", actuator_offset, "m", "actuator position from mid-span")
+    lim = 0.25 * g.arch_span
+    if abs(dx) > lim:
+        raise ValueError(f"actuator_offset (actuator position from mid-span along x, m) must "
+                         f"be within [-{lim:.6g}, {lim:.6g}] m (a quarter of the arch span); "
+                         f"got {dx!r}")
+    return tilt, dy, dx
+
+
+def _check_nodes(nodes):
+    if isinstance(nodes, bool) or not isinstance(nodes, (int, np.integer)) or nodes < 21:
+        raise ValueError(f"nodes (resolution: nodes along a rail) must be an integer >= 21; "
+                         f"got {nodes!r}")
+    if nodes > 2001:
+        raise ValueError(f"nodes (resolution: nodes along a rail) must be <= 2001; got {nodes!r}")
+    return int(nodes)
+
+
+def build_unit_mesh_3d(
+    g: UnitGeometry,
+    nodes: int = DEFAULT_NODES_3D,
+    tilt_deg: float = 0.0,
+    apex_offset: float = 0.0,
+    actuator_offset: float = 0.0,
+    nu: float = PETG_NU,
+    actuator: bool = True,
+    supports: bool = True,
+    bar_divisions: int = 2,
+    bond: str = "joint",
+) -> Unit3DModel:
+    """Mesh the 3-D unit (no solver needed): frame base, arch, bonds, rollers, actuator.
+
+    ``nodes``: nodes along a rail (edge length about L / (nodes - 1)); imperfections as in the
+    module docstring; ``bar_divisions``: edges of a cross bar per half width (>= 1);
+    ``bond``: "joint" (orientations coupled at every bonded node) or "tie" (positions shared
+    at every bonded node, orientations coupled at the bond's two ends).
+    Returns a `Unit3DModel` whose ``structure`` is None.
+    """
+    if not isinstance(g, UnitGeometry):
+        raise ValueError(f"g must be a UnitGeometry; got {type(g).__name__}")
+    if g.h <= 0:
+        raise ValueError("h (arch apex height, m) must be > 0 for a 3-D unit; got 0")
+    nodes = _check_nodes(nodes)
+    nu = float(nu)
+    if not -1.0 < nu <= 0.5:
+        raise ValueError(f"nu (Poisson's ratio) must be in (-1, 0.5]; got {nu!r}")
+    tilt, dy, dx = _check_imperfections(tilt_deg, apex_offset, actuator_offset, g)
+    if isinstance(bar_divisions, bool) or not isinstance(bar_divisions, (int, np.integer)) \
+            or not 1 <= bar_divisions <= 64:
+        raise ValueError(f"bar_divisions (cross-bar edges per half width) must be an integer "
+                         f"in [1, 64]; got {bar_divisions!r}")
+    if bond not in ("joint", "tie"):
+        raise ValueError(f"bond must be 'joint' or 'tie'; got {bond!r}")
+    L, w, t, x0 = g.L, g.w, g.t, g.flat_length
+    spacing = L / (nodes - 1)
+    sup = SUPPORT_OFFSET * L
+    he = 0.5 * min(spacing, 0.5 * x0, 0.25 * g.arch_span)
+    if abs(sup - x0) < he * (1 + 1e-9):  # as the planar unit: keep the roller at 0.03 L
+        he = max(0.5 * abs(sup - x0), 0.05 * spacing)
+        if abs(sup - x0) < he * (1 + 1e-9):
+            sup = x0 - he
+    breaks = np.array([0.0, sup, x0 - he, x0 + he, 0.5 * L, L - x0 - he, L - x0 + he,
+                       L - sup, L])
+    breaks = np.unique(np.round(breaks / L, 14)) * L
+    base_x = segment_points(breaks, spacing)
+    # exactly mirror-symmetric, so that mirrored nodes of different rods coincide bit for bit
+    left = base_x[base_x <= 0.5 * L * (1 + 1e-12)]
+    base_x = np.concatenate([left, L - left[::-1][1:]])
+    n_end = int(np.count_nonzero(base_x <= x0 + he * (1 + 1e-9)))  # nodes of an end region
+    end_x = base_x[:n_end]
+
+    mesh = Mesh3D(E=g.E, nu=nu)
+    yr = 1.5 * w
+    zeros = np.zeros_like(base_x)
+    rail_l = mesh.add_rod("rail_left", np.stack([base_x, zeros - yr, zeros], 1), w, t)
+    rail_r = mesh.add_rod("rail_right", np.stack([base_x, zeros + yr, zeros], 1), w, t)
+
+    # centre strips of the two end regions (width 2w), from the end to half an edge past x0
+    zc = np.zeros(n_end)
+    c_left = mesh.add_rod("centre_left", np.stack([end_x, zc, zc], 1), 2 * w, t)
+    # (both strips run along +x, as the arch they are bonded to: see Mesh3D.bond)
+    c_right = mesh.add_rod("centre_right", np.stack([L - end_x[::-1], zc, zc], 1), 2 * w, t)
+
+    # cross bars across the width at every end-region node; each is as wide (in x) as the
+    # length of plate between the midpoints to its neighbours, clipped to the plate [0, x0];
+    # the bar half an edge past x0 (which closes the bonded edge) gets half an edge.
+    # bar nodes across the width: at the rails, the centre and between (bar_divisions parts
+    # per half width; the end regions are short and stiff, see the convergence study)
+    y_half = segment_points(np.array([0.0, yr]), yr / bar_divisions * (1 + 1e-12))
+    y_bar = np.concatenate([-y_half[::-1], y_half[1:]])
+    mids = np.concatenate([[0.0], 0.5 * (end_x[1:] + end_x[:-1]), [end_x[-1]]])
+    bar_w = np.minimum(mids[1:], x0) - np.minimum(mids[:-1], x0)
+    bar_w[-1] = max(bar_w[-1], he)
+    i_l, i_0, i_r = 0, len(y_half) - 1, len(y_bar) - 1
+    support_nodes = []
+    for side, (rail_a, rail_b, centre) in (("left", (rail_l, rail_r, c_left)),
+                                           ("right", (rail_l[::-1], rail_r[::-1], c_right[::-1]))):
+        for k in range(n_end):
+            x = end_x[k] if side == "left" else L - end_x[k]
+            pts = np.stack([np.full_like(y_bar, x), y_bar, np.zeros_like(y_bar)], 1)
+            bar = mesh.add_rod(f"bar_{side}_{k}", pts, bar_w[k], t)
+            for a_, b_ in ((rail_a[k], bar[i_l]), (centre[k], bar[i_0]), (rail_b[k], bar[i_r])):
+                mesh.bond(a_, b_)
+            if abs(end_x[k] - sup) < 1e-9 * L:
+                support_nodes += [int(n) for n in bar]
+                support_nodes += [int(rail_a[k]), int(rail_b[k]), int(centre[k])]
+
+    # the arch: flat on the end regions up to half an edge past x0, raised in between
+    x_act = 0.5 * L + dx
+    jl = float(getattr(g, "joint_length", JOINT_LENGTH_DEFAULT))
+    raised, act, (lo, hi) = arch_nodes_x(end_x[-1], L - end_x[-1], x0, g.arch_span, g.h,
+                                         spacing, x_act, jl)
+    arch_x = np.concatenate([end_x[:-1], raised, L - end_x[:-1][::-1]])
+    z = arch_profile(arch_x, x0, g.arch_span, g.h)
+    z[:n_end] = 0.0  # the bonded edge across x0 lies on the base (as the planar unit)
+    z[-n_end:] = 0.0
+    a = math.radians(tilt)
+    y = z * math.sin(a) + dy * z / g.h
+    z = z * math.cos(a)
+    arch = mesh.add_rod("arch", np.stack([arch_x, y, z], 1), w, t)
+    # bond: the arch nodes on an end region share their positions with the coincident centre
+    # strip nodes; bond="joint" also couples their orientations at every node (a rigid
+    # joint adds a bending/twisting pair; at the rods' common end a tie, see Mesh3D.bond),
+    # bond="tie" only next to the two ends of the bond
+    glued = g.bond if hasattr(g, "bond") else x0
+    n_bond = n_end if glued >= x0 * (1 - 1e-12) else int(np.count_nonzero(end_x <= glued + 1e-12 * L))
+    for k in range(n_bond):
+        for a_, b_ in ((arch[k], c_left[k]), (arch[-1 - k], c_right[-1 - k])):
+            if bond == "joint" or k in (1, n_bond - 1):
+                mesh.bond(a_, b_)
+            else:
+                mesh.ties.append((int(a_), int(b_)))
+
+    offset = n_end - 1
+    push = int(arch[offset + act])
+    head = np.zeros(0, dtype=np.int64)
+    if actuator:
+        # the actuator (a T-rod glued on the arch) holds the arch's orientation: the glued
+        # arch segment translates as one (which holds its tangent), and a short stiff head
+        # across the arch, jointed to it at the push point and translating with it, holds the
+        # roll about the arch's tangent that a rigid translation leaves free
+        p0 = mesh.positions[push]
+        across = np.array([0.0, math.cos(a), -math.sin(a)])
+        pts = p0 + np.outer([-0.5 * w, 0.0, 0.5 * w], across)
+        head = mesh.add_rod("actuator_head", pts, w, 3 * t, normal=(0.0, math.sin(a), math.cos(a)))
+        mesh.bond(push, head[1])
+        mesh.rigid.append([int(n) for n in arch[offset + lo: offset + hi]]
+                          + [int(head[0]), int(head[2])])
+        mesh.fixes.append((push, "xy"))
+    if supports:
+        for n in support_nodes:
+            mesh.fixes.append((n, "z"))
+    mesh.named.update(push=push, base_mid_left=int(rail_l[np.argmin(np.abs(base_x - 0.5 * L))]),
+                      base_mid_right=int(rail_r[np.argmin(np.abs(base_x - 0.5 * L))]))
+    mesh.groups.update(rail_left=rail_l, rail_right=rail_r, arch=arch, centre_left=c_left,
+                       centre_right=c_right, supports=np.array(support_nodes, dtype=np.int64),
+                       actuator=arch[offset + lo: offset + hi].copy(), actuator_head=head)
+    return Unit3DModel(mesh, None, push, rail_l, rail_r, arch,
+                       np.array(support_nodes, dtype=np.int64))
+
+
+def build_unit_3d(g: UnitGeometry, nodes: int = DEFAULT_NODES_3D, **options) -> Unit3DModel:
+    """Mesh the 3-D unit and build its `solver.Structure3D` (options: `build_unit_mesh_3d`)."""
+    model = build_unit_mesh_3d(g, nodes=nodes, **options)
+    model.structure = model.mesh.to_structure()
+    return model
+
+
+@dataclass
+class Unit3DResult:
+    """Metrics of the 3-D unit, SI (N, m, degrees), NaN where absent. The planar
+    `UnitResult`'s metrics (F_cr, d_cr, d_unstable, d_second, S, theta_deg, bistable, shapes)
+    plus the out-of-plane ones:
+
+    arch_tilt_deg: {"i", "ii", "iii"} -> lean of the arch about x at the push point, from the
+    vertical (degrees, > 0 toward +y; the imposed tilt in the stress-free state);
+    rail_twist_deg: {"i", "ii", "iii"} -> largest rotation of the base's cross-section about x
+    (from the heights of the two rails at the same x), degrees;
+    arch_lateral: {"i", "ii", "iii"} -> largest sideways (y) displacement of an arch node, m.
+    shapes[state] = {"rail_left", "rail_right", "arch", "base"} (n, 3) positions (base: the
+    mean of the two rails, the planar model's base line), and "rods": every rod by name;
+    ``reference``: the same for the stress-free state.
+    """
+
+    geometry: UnitGeometry
+    status: str
+    imperfection: dict = field(default_factory=dict)
+    bistable: bool = False
+    F_cr: float = NAN
+    d_cr: float = NAN
+    d_unstable: float = NAN
+    d_second: float = NAN
+    S: float = NAN
+    theta_deg: float = NAN
+    arch_tilt_deg: dict = field(default_factory=dict)
+    rail_twist_deg: dict = field(default_factory=dict)
+    arch_lateral: dict = field(default_factory=dict)
+    curve: tuple = (np.zeros(0), np.zeros(0))
+    base_shape: np.ndarray = field(default_factory=lambda: np.full((0, 3), np.nan))
+    shapes: dict = field(default_factory=dict)
+    reference: dict = field(default_factory=dict)
+    path_status: str = ""
+    exact_states: bool = False
+    solve_time: float = NAN
+    n_nodes: int = 0
+
+    def summary(self) -> dict:
+        keys = ("status", "bistable", "F_cr", "d_cr", "d_unstable", "d_second", "S",
+                "theta_deg", "solve_time", "n_nodes")
+        out = {k: getattr(self, k) for k in keys}
+        for name in ("arch_tilt_deg", "rail_twist_deg", "arch_lateral"):
+            for state, v in getattr(self, name).items():
+                out[f"{name}_{state}"] = v
+        out.update({f"imperfection_{k}": v for k, v in self.imperfection.items()})
+        return out
+
+
+def section_rotation_deg(rail_left_pos, rail_right_pos):
+    """(n,) rotation of the base's cross-section about x at each rail node, degrees: the angle
+    of the segment from the left to the right rail node against the horizontal."""
+    d = np.asarray(rail_right_pos) - np.asarray(rail_left_pos)
+    return np.degrees(np.arctan2(d[:, 2], np.hypot(d[:, 0], d[:, 1])))
+
+
+def arch_lean_deg(arch_pos, push_index, foot_left, foot_right):
+    """Lean (degrees, > 0 toward +y) of the arch about x: the direction from the midpoint of
+    its two bonded ends to the push point, in the y–z plane, measured from +z (or from -z when
+    the push point is below the feet, state iii)."""
+    p = np.asarray(arch_pos)
+    foot = 0.5 * (p[foot_left] + p[foot_right])
+    v = p[push_index] - foot
+    if abs(v[1]) < 1e-15 and abs(v[2]) < 1e-15:
+        return 0.0
+    s = 1.0 if v[2] >= 0 else -1.0
+    return math.degrees(math.atan2(s * v[1], abs(v[2])))
+
+
+def unit3d_metrics(model: Unit3DModel, positions) -> dict:
+    """Base line, S, theta and the out-of-plane measures of one state (n_nodes, 3)."""
+    P = np.asarray(positions)
+    rl, rr, arch = P[model.rail_left], P[model.rail_right], P[model.arch]
+    base = 0.5 * (rl + rr)
+    push_idx = int(np.nonzero(model.arch == model.push_node)[0][0])
+    foot = int(np.count_nonzero(model.mesh.groups["centre_left"] >= 0)) - 1
+    X = model.mesh.positions
+    return {
+        "base": base, "rail_left": rl, "rail_right": rr, "arch": arch,
+        "S": float(base[-1, 0] - base[0, 0]),
+        "theta_deg": end_tangent_angle(base),
+        "rail_twist_deg": float(np.max(np.abs(section_rotation_deg(rl, rr)))),
+        "arch_tilt_deg": arch_lean_deg(arch, push_idx, foot, len(arch) - 1 - foot),
+        "arch_lateral": float(np.max(np.abs(arch[:, 1] - X[model.arch, 1]))),
+    }
+
+
+def simulate_unit_3d(
+    g: UnitGeometry,
+    nodes: int | None = None,
+    tilt_deg: float = 0.0,
+    apex_offset: float = 0.0,
+    actuator_offset: float = 0.0,
+    nu: float = PETG_NU,
+    steps: int = 60,
+    critical: bool = False,
+    bar_divisions: int = 2,
+    bond: str = "joint",
+) -> Unit3DResult:
+    """Push the 3-D unit's actuator down until it snaps; the planar metrics plus arch tilt,
+    rail twist and sideways motion of the arch (see `Unit3DResult`).
+
+    ``nodes``: resolution (nodes along a rail; None = DEFAULT_NODES_3D); ``steps``: first
+    step as a fraction of 3 h; ``critical``: detect bifurcations on the path (slower).
+    Never raises for a unit that can be built: failures come back in ``status``.
+    """
+    nodes = DEFAULT_NODES_3D if nodes is None else nodes
+    t0 = time.perf_counter()
+    model = build_unit_3d(g, nodes=nodes, tilt_deg=tilt_deg, apex_offset=apex_offset,
+                          actuator_offset=actuator_offset, nu=nu, bar_divisions=bar_divisions,
+                          bond=bond)
+    imperfection = {"tilt_deg": float(tilt_deg), "apex_offset": float(apex_offset),
+                    "actuator_offset": float(actuator_offset)}
+    out: PushOutcome = push_through(model.structure, model.push_node, 3.0 * g.h, steps=steps,
+                                    critical=critical)
+    r = Unit3DResult(g, out.status, imperfection=imperfection, curve=out.curve,
+                     path_status=out.path_status, F_cr=out.F_cr, d_cr=out.d_cr,
+                     d_unstable=out.d_unstable, d_second=out.d_second,
+                     bistable=out.bistable, exact_states=out.exact_states)
+    r.reference = unit3d_metrics(model, model.mesh.positions)
+    r.reference["rods"] = {rod.name: rod.xyz.copy() for rod in model.mesh.rods}
+    for state, pos in out.states.items():
+        m = unit3d_metrics(model, pos)
+        r.shapes[state] = {k: m[k] for k in ("rail_left", "rail_right", "arch", "base")}
+        r.shapes[state]["rods"] = {rod.name: np.asarray(pos)[rod.nodes] for rod in model.mesh.rods}
+        r.arch_tilt_deg[state] = m["arch_tilt_deg"]
+        r.rail_twist_deg[state] = m["rail_twist_deg"]
+        r.arch_lateral[state] = m["arch_lateral"]
+        if state == "iii":
+            r.S, r.theta_deg, r.base_shape = m["S"], m["theta_deg"], m["base"].copy()
+    r.solve_time = time.perf_counter() - t0
+    r.n_nodes = model.mesh.n_nodes
+    return r
