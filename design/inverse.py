@@ -204,7 +204,8 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
 
     points: the target: (N, 2) points in m in any orientation (N >= 2; a smooth parametric
         spline through them, parametrised by arc length), or a file: CSV in mm
-        (x, y[, tangent_deg]), SVG (the first path's `d`, mm) or DXF (the first polyline, mm).
+        (x, y[, tangent_deg]; splined the same way), SVG (the first path's `d`, mm) or DXF (the
+        first polyline, mm); drawn curves are sampled densely and taken as drawn.
     tangents: tangent direction at each point, degrees (N,) or vectors (N, 2): the points are
         then control points and the target is the biarcs through them (the paper's S).
     tol: the largest deviation allowed, a fraction of the target's arc length (0 < tol < 1).
@@ -229,7 +230,9 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     controls, max_controls, min_turn_deg, merge_deg, refine: the paper-style procedure for
         points with x increasing (`controls`: x in m of the control points; `refine`: least
         squares on its (L, h/L)); with `controls` (or theta_convention="paper") that procedure
-        is used instead of the tolerance-driven one.
+        is used instead of the tolerance-driven one. With tangents, the biarc design is refined
+        by the tolerance-driven one when it misses tol (refine=None) or always (True), never
+        with refine=False (the paper's procedure as it is).
     plot: a path: also draw target, predicted (and simulated) shapes there.
     """
     import warnings
@@ -247,9 +250,13 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
         raise ValueError(f"min_barrier must be a number (E I_arch / L), got {min_barrier!r}") from None
     if not (math.isfinite(min_barrier) and min_barrier >= 0):
         raise ValueError(f"min_barrier must be >= 0 (E I_arch / L), got {min_barrier!r}")
+    drawn = False  # a curve read from a drawing (SVG, DXF) is taken as drawn, not splined
     if isinstance(points, (str, bytes)) or hasattr(points, "__fspath__"):
+        from pathlib import Path
+
         from design.target_io import read_target
 
+        drawn = Path(points).suffix.lower() in (".svg", ".dxf")
         points, file_tangents = read_target(points)
         if tangents is None:
             tangents = file_tangents
@@ -269,7 +276,7 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
         design = designer.design(pts, angles, target_xy)
         design.points = pts
         design = _assess(design, target_xy, dm, state_kw, placement, tol)
-        if theta_convention == "ours" and (refine or not design.met):
+        if theta_convention == "ours" and (refine or (refine is None and not design.met)):
             curve = _curve_design(Target.from_polyline(target_xy), t, w, dm, tol, placement,
                                   L_range, hL_range, min_barrier, state, max_units, lookup)
             if curve.max_deviation < design.max_deviation:
@@ -291,7 +298,7 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
             design = designer.refine(design)
         design = _assess(design, design.target, dm, state_kw, placement, tol)
     else:
-        target = Target.from_points(points)
+        target = Target.from_polyline(points) if drawn else Target.from_points(points)
         design = _curve_design(target, t, w, dm, tol, placement, L_range, hL_range, min_barrier,
                                state, max_units, lookup)
         design.points = target.points
@@ -631,6 +638,8 @@ STATES = ("released", "actuated")
 _N_FIT = 160
 #: spacers shorter than this (m) are dropped from an initial layout (they are glue joints)
 _MIN_SPACER = 1e-3
+#: relative margin kept from the fabrication limits (see `_Fit.bounds`)
+_EDGE = 1e-5
 
 
 def _map_states(dm) -> tuple:
@@ -993,8 +1002,10 @@ class _Fit:
         lo, hi = [], []
         for i in range(self.n):
             if self.m.sides[i] != 0:
-                lo += [self.lim.L_min / self.Lref, self.lim.hL_min]
-                hi += [self.lim.L_max / self.Lref, self.lim.hL_max]
+                # a hair inside the limits: a unit on the map's edge must stay inside it after
+                # units.csv rounds it to mm
+                lo += [self.lim.L_min * (1 + _EDGE) / self.Lref, self.lim.hL_min * (1 + _EDGE)]
+                hi += [self.lim.L_max * (1 - _EDGE) / self.Lref, self.lim.hL_max * (1 - _EDGE)]
             else:
                 lo.append(self.lim.spacer_min / self.Lref)
                 hi.append(2.0)
@@ -1126,10 +1137,12 @@ def _pieces_for(units, target: Target) -> list:
 
 
 def _assess(design: Design, target_xy: np.ndarray, dm, state_kw: dict, placement: str,
-            tol: float, start=None, angle=None) -> Design:
+            tol: float, start=None, angle=None, quick: int | None = None) -> Design:
     """Fill in the deviations of a design's predicted all-snapped base, both ways: start
     clamped on the target's start point and tangent, and best rigid placement; select the one
-    `placement` names for `predicted`, `max_deviation`, `rms_deviation` and `placement`."""
+    `placement` names for `predicted`, `max_deviation`, `rms_deviation` and `placement`.
+    quick: search the best placement from (start, angle) only, in at most `quick` iterations
+    (while comparing candidates; the chosen design is assessed in full)."""
     t_start = target_xy[0]
     seg = np.diff(resample(target_xy, 2001)[:2], axis=0)[0]
     t_angle = (float(design.control_angles[0]) if len(design.control_angles)
@@ -1138,7 +1151,8 @@ def _assess(design: Design, target_xy: np.ndarray, dm, state_kw: dict, placement
     clamped = place_rigid(local, t_start, t_angle)
     s0 = start if start is not None else t_start
     a0 = angle if angle is not None else t_angle
-    best_start, best_angle = best_rigid_placement(local, target_xy, start=s0, angle=a0)
+    best_start, best_angle = best_rigid_placement(local, target_xy, start=s0, angle=a0,
+                                                  kabsch=quick is None, maxiter=quick or 400)
     best = place_rigid(local, best_start, best_angle)
     design.deviations = {"clamped": deviation(clamped, target_xy), "best": deviation(best, target_xy)}
     if design.deviations["best"][0] > design.deviations["clamped"][0]:
@@ -1238,7 +1252,8 @@ def _curve_design(target: Target, t, w, dm, tol, placement, L_range, hL_range, m
                        max_deviation=math.inf, rms_deviation=math.inf,
                        control_points=np.empty((0, 2)), control_angles=np.array([target.start_angle]),
                        arcs=[], pieces=_pieces_for(units, target), t=t, w=w)
-            d = _assess(d, target.xy, dm, state_kw, placement, tol, start=start, angle=angle)
+            d = _assess(d, target.xy, dm, state_kw, placement, tol, start=start, angle=angle,
+                        quick=80)
         except ValueError as exc:
             tried.append((q, len(sides), str(exc)))
             continue
@@ -1253,6 +1268,8 @@ def _curve_design(target: Target, t, w, dm, tol, placement, L_range, hL_range, m
             break
     if best is None:
         raise ValueError("no design: " + "; ".join(str(e) for _, _, e in tried if isinstance(e, str)))
+    x0, y0, a0 = best.placements["best"]
+    best = _assess(best, target.xy, dm, state_kw, placement, tol, start=(x0, y0), angle=a0)
     best.history = tried
     best.state = state_used
     best.limits = lim

@@ -250,19 +250,21 @@ def place_rigid(xy: np.ndarray, start, angle: float) -> np.ndarray:
 
 
 def best_rigid_placement(xy: np.ndarray, target: np.ndarray, start=(0.0, 0.0),
-                         angle: float = 0.0, n: int = 200):
+                         angle: float = 0.0, n: int = 200, kabsch: bool = True,
+                         maxiter: int = 400):
     """The rigid placement of polyline xy (given from (0, 0) heading +x) on the target that
     minimises the max distance between the curves (`deviation`): ((x0, y0), angle) in m, rad.
     Starts from `start`, `angle` and from the least-squares fit of arc-length-matched points
-    (Kabsch), then Nelder-Mead on the max distance of n + n samples."""
+    (Kabsch; unless kabsch is False), then Nelder-Mead (at most maxiter iterations) on the max
+    distance of n + n samples."""
     from scipy.optimize import minimize
     from scipy.spatial import cKDTree
 
     # For the search only: distances to densely resampled curves (nearest sample; off by at
-    # most half a sample spacing, 1/8000 of the length) through k-d trees built once, the
+    # most half a sample spacing, 1/4000 of the length) through k-d trees built once, the
     # target's in its frame and the polyline's in its own. The result is measured exactly.
     length = arc_length(target)
-    dense = 4000
+    dense = 2000
     tree_t = cKDTree(resample(target, dense))
     tree_p = cKDTree(resample(xy, dense))
     ps, ts = resample(xy, n), resample(target, n)
@@ -281,11 +283,12 @@ def best_rigid_placement(xy: np.ndarray, target: np.ndarray, start=(0.0, 0.0),
     rot = math.atan2(H[0, 1] - H[1, 0], H[0, 0] + H[1, 1])
     c, s = math.cos(rot), math.sin(rot)
     x0 = cb - np.array([[c, -s], [s, c]]) @ ca
-    starts.append(np.array([x0[0] / length, x0[1] / length, rot]))
+    if kabsch:
+        starts.append(np.array([x0[0] / length, x0[1] / length, rot]))
     best = None
     for v0 in starts:
         res = minimize(cost, v0, method="Nelder-Mead",
-                       options={"xatol": 1e-7, "fatol": 1e-8, "maxiter": 400,
+                       options={"xatol": 1e-7, "fatol": 1e-8, "maxiter": maxiter,
                                 "initial_simplex": v0 + np.vstack([np.zeros(3), 0.003 * np.eye(3)])})
         if best is None or res.fun < best.fun:
             best = res

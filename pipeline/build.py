@@ -309,12 +309,14 @@ def _batches(todo: np.ndarray, batch_size: int):
     return [todo[i:i + batch_size] for i in range(0, todo.size, batch_size)]
 
 
-def open_checkpoint(out, grid, solve=solve_point, restart: bool = False, *, kind="unit") -> Checkpoint:
+def open_checkpoint(out, grid, solve=solve_point, restart: bool = False, *, kind="unit",
+                    identity=None) -> Checkpoint:
     """The checkpoint of a build of `grid` into `out` (created, or resumed), recording the
-    build's inputs and fingerprint, and the provenance of the model source."""
+    build's inputs and fingerprint, and the provenance of the model source. identity: the
+    build's (spec, options, inputs, fingerprint) if already computed."""
     from pipeline.dataset import package_version
 
-    spec, options, inputs, fp = build_identity(grid, solve, kind)
+    spec, options, inputs, fp = identity or build_identity(grid, solve, kind)
     prov = {**source_provenance(solver_modules(spec, resolve_solver(solve if solve is not None else spec.solve))),
             "package_version": package_version(), "resolution": options.get("resolution")}
     return Checkpoint.open(out, grid, inputs["solver"], prov, restart=restart, spec=spec,
@@ -374,8 +376,12 @@ def build_map(grid, out, *, solve=_DEFAULT, kind="unit", warm=_DEFAULT, schedule
     if warm is _DEFAULT:
         warm = (warm_up if spec.name == "unit" else resolve_solver(spec.warm)) if own_solver and spec.warm else None
     out = check_output_path(out)
+    address = _scheduler_address(scheduler)
+    if address and address.endswith(".json") and not Path(address).is_file():
+        raise SchedulerConnectError(f"scheduler file {address} does not exist")
 
-    _, options, inputs, fp = build_identity(grid, solve, spec)
+    identity = build_identity(grid, solve, spec)
+    _, options, inputs, fp = identity
     names = dict(spec.status_codes)
     n_points = grid.size
     if out.exists() and not force:
@@ -389,7 +395,7 @@ def build_map(grid, out, *, solve=_DEFAULT, kind="unit", warm=_DEFAULT, schedule
             warnings.warn(f"rebuilding {out}: its inputs differ from this build's ({changed})", stacklevel=2)
 
     coords = grid.points()
-    ckpt = open_checkpoint(out, grid, solve, restart=restart, kind=spec)
+    ckpt = open_checkpoint(out, grid, solve, restart=restart, kind=spec, identity=identity)
     stats = {"workers": 0, "batch_size": 0, "fanout": 0.0, "startup": 0.0, "solve": 0.0}
     try:
         total = new_block(spec, np.arange(n_points), options, coords)
@@ -402,7 +408,10 @@ def build_map(grid, out, *, solve=_DEFAULT, kind="unit", warm=_DEFAULT, schedule
                      batch_size, progress, timeout, connect_timeout, time_limit, stats)
         _write_and_verify(spec, grid, options, inputs, fp, ckpt.meta, total, coords, out, keep_solve_time)
     except BaseException:
-        ckpt.close()
+        if any(ckpt.dir.glob("batch-*.npz")) or any(ckpt.dir.glob("refused-*.npz")):
+            ckpt.close()  # keep what was computed (and the refused files, as evidence)
+        else:
+            ckpt.remove()  # nothing worth resuming (e.g. the scheduler did not answer)
         raise
     ckpt.remove()
     report = _report(out, spec, grid, total["status"], total, t_start, fingerprint=fp, names=names,

@@ -110,6 +110,7 @@ class BranchMonitor:
         self.load_unit = float(load_unit)
         self.rig_step = None if rig_step is None else float(rig_step)
         self._held = None
+        self.rig_jumps: list[float] = []  # d (m) where `rig_onwards` moved the path on
         self._system = system
         self._P = None
         self.points: list[CriticalPoint] = []
@@ -375,6 +376,24 @@ class BranchMonitor:
                 extra_fixed=[(self.control.node, self.control_axis)])
         return self._held
 
+    def rig_onwards(self):
+        """The driver is stuck at its last state (its steps shrank to nothing, e.g. at a
+        point where several branches meet and a limit point coincides, or at a snap-back
+        under displacement control): do what a displacement-controlled rig does there
+        (`_rig_switch` from the last state). Returns a `Reroute` whose ``critical`` is the
+        last state itself (already a path row), or None."""
+        if self.control_axis is None or self.rig_step is None:
+            return None
+        c = self.history[-1]
+        a = self.history[-2] if len(self.history) > 1 else c
+        t0 = time.perf_counter()
+        reroute = self._rig_switch(a, c)
+        self.seconds += time.perf_counter() - t0
+        if reroute is not None:
+            self.rig_jumps.append(float(c.d))
+            self.history = [c, reroute.state]
+        return reroute
+
     def _rig_switch(self, a, c):
         """What a displacement-controlled rig does at the bifurcation point c (reached from
         the state a): the pushed node is moved on to d_c + rig_step and the structure settles
@@ -412,16 +431,20 @@ class BranchMonitor:
         distance = float(np.linalg.norm(sysm.reduced(q) - sysm.reduced(c.q)))
         return Reroute(c, state, orient * uP, rate, distance)
 
-    def _settle(self, sysd, q, max_iter=200):
-        """Move q (pushed displacement held) to a stable equilibrium: Newton steps on
-        K + mu I (mu makes it positive definite, so every step goes down the energy) plus
-        a push along the unstable modes, with a backtracking line search on the energy;
-        plain Newton once K is positive definite. Returns True on success (q updated, the
-        system factorised there)."""
+    def _settle(self, sysd, q, max_iter=100):
+        """Move q (pushed displacement held) to a stable equilibrium. While K has negative
+        eigenvalues: a push along directions of negative curvature read off the LDL^T
+        factor (``x_j = K^-1 L D e_j`` for each negative pivot j: ``x_j^T K x_j = D_j < 0``,
+        and the x_j are K-orthogonal, so their sum has negative curvature too), then Newton
+        steps on K + mu I, mu just above the most negative eigenvalue (found by bisection on
+        the LDL^T inertia), which go down the energy and let the unstable components grow
+        about tenfold per step, with a backtracking line search on the energy. Plain Newton
+        once K is positive definite. Returns True on success (q updated, the system
+        factorised there)."""
         tol_force = self.tol * self.fscale
         tol_disp = 1e-11 * self.length
         du_max = np.inf
-        kicks = 0
+        kicked = False
         for _ in range(max_iter):
             energy = sysd.evaluate(q)
             g = sysd.grad[: sysd.n].copy()
@@ -429,43 +452,30 @@ class BranchMonitor:
                 return False
             band = sysd.band.copy()
             status, negative, _ = ldlt_factor(sysd.band, 0.0)
+            sysd._dense_lu = None  # solve() uses the band factor just made
             if status != 0:
-                sysd.band[:, :] = band
                 negative = -1
-            r_max = float(np.max(np.abs(g))) if g.size else 0.0
             if negative == 0:
-                sysd.factor_ok = True
-                sysd.negative_eigenvalues = 0
-                sysd._dense_lu = None
-                if r_max <= tol_force or du_max <= tol_disp:
+                sysd.factor_ok, sysd.negative_eigenvalues, sysd._dense_lu = True, 0, None
+                if float(np.max(np.abs(g))) <= tol_force or du_max <= tol_disp:
                     return True
                 du = sysd.solve(-g)
             else:
-                w, v = scipy.linalg.eig_banded(band, lower=True, select="i",
-                                               select_range=(0, max(negative, 1) - 1),
-                                               check_finite=False)
-                shifted = band.copy()
-                mu = 2.0 * max(-float(w[0]), 0.0) + 1e-6 * float(np.max(np.abs(band[0])))
-                shifted[0] += mu
-                if ldlt_factor(shifted, 0.0)[0] != 0:
+                kick = None
+                if not kicked and status == 0:
+                    kick = _negative_curvature(sysd.band, lambda y: sysd.solve(y))
+                    kicked = True
+                mu = _definite_shift(band)
+                if mu is None:
                     return False
+                shifted = band.copy()
+                shifted[0] += mu
+                ldlt_factor(shifted, 0.0)
                 du = ldlt_solve(shifted, np.ascontiguousarray(-g.reshape(-1, 1))).ravel()
-                # leave the saddle along every unstable mode (a sum: all of them grow),
-                # each oriented with its largest component positive (deterministic)
-                kick = np.zeros_like(du)
-                for j in range(v.shape[1]):
-                    col = v[:, j] if w[j] < 0 else 0.0 * v[:, j]
-                    if np.any(col):
-                        col = col if col[np.argmax(np.abs(col))] > 0 else -col
-                        kick += col
-                if np.any(kick) and kicks < 20:
-                    kicks += 1
-                    size = self.rig_step * max(1.0, float(np.linalg.norm(du)) / self.rig_step)
-                    du = du + size * kick / np.linalg.norm(kick)
+                if kick is not None:
+                    du += 0.1 * self.rig_step * kick
             if not np.all(np.isfinite(du)):
                 return False
-            # backtracking on the energy (Newton steps on a positive definite K may be
-            # taken whole once the energy drops)
             t = 1.0
             q_base = q.copy()
             while True:
@@ -558,6 +568,55 @@ class BranchMonitor:
             rate = expand_full(sysm, uP / flex)
         dz = np.append(sysm.reduced(q) - sysm.reduced(c.q), omega * (lam - c.lam))
         return Reroute(c, state, step, rate, float(np.linalg.norm(dz)))
+
+
+def _negative_curvature(factor, solve):
+    """A unit direction of negative curvature from an LDL^T factor in band storage (row 0:
+    D, rows k: L[j + k, j]) with negative pivots: the sum over negative pivots j of
+    ``x_j = K^-1 L D e_j`` (normalised, largest component positive), or None."""
+    n = factor.shape[1]
+    bw = factor.shape[0] - 1
+    total = np.zeros(n)
+    for j in np.flatnonzero(factor[0] < 0.0):
+        y = np.zeros(n)
+        y[j] = factor[0, j]
+        k = min(bw, n - 1 - j)
+        y[j + 1: j + 1 + k] = factor[0, j] * factor[1: 1 + k, j]
+        x = solve(y)
+        norm = float(np.linalg.norm(x))
+        if norm > 0.0 and np.isfinite(norm):
+            x = x / norm
+            total += x if x[np.argmax(np.abs(x))] > 0 else -x
+    norm = float(np.linalg.norm(total))
+    return total / norm if norm > 0.0 else None
+
+
+def _definite_shift(band, rel=0.05):
+    """The smallest mu (within ``rel``) that makes the banded symmetric K + mu I positive
+    definite, by bisection on the inertia of LDL^T; None when none is found."""
+    scale = float(np.max(np.abs(band[0])))
+    if not scale > 0.0 or not np.isfinite(scale):
+        return None
+
+    def definite(mu):
+        b = band.copy()
+        b[0] += mu
+        status, negative, _ = ldlt_factor(b, 0.0)
+        return status == 0 and negative == 0
+
+    hi = 1e-12 * scale
+    while not definite(hi):
+        hi *= 4.0
+        if hi > 1e3 * scale:
+            return None
+    lo = 0.0
+    while hi - lo > rel * hi:
+        mid = 0.5 * (lo + hi)
+        if definite(mid):
+            hi = mid
+        else:
+            lo = mid
+    return hi * (1.0 + rel)
 
 
 def _illinois(lo, hi, evaluate, f_of, root, tol_tau, tol_f, max_eval):

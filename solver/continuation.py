@@ -480,6 +480,7 @@ def follow_displacement(
     q_prev, d_prev = None, 0.0
     status = "ok"
     sign = control.direction[axis]
+    turn_candidate = None
     while d < control.distance * (1 - 1e-12):
         if len(rec.rows["d"]) > max_steps:
             status = f"stopped: more than {max_steps} steps"
@@ -499,15 +500,38 @@ def follow_displacement(
                 and monitor.suspicious(system.negative_eigenvalues, 1.0)):
             dd = step / 2  # refine a step across which the count changes
             continue
+        if it >= 0 and step > CROSSING_REFINE * dd0 and _force_turns(rec, control.force(system),
+                                                                     10 * tol * fmax):
+            # refine onto a force extremum (a kink where branches exchange); should a
+            # shorter step fail (the point may be singular), the longer one is taken
+            if turn_candidate is None:
+                turn_candidate = (q_try.copy(), target, it)
+            dd = step / 2
+            continue
+        if it < 0 and turn_candidate is not None:
+            q_try, target, it = turn_candidate
+            system.evaluate(q_try)
+            system.factor()
         if it < 0:
             dd = step / 2
             if dd < o["min_step_ratio"] * dd0:
+                reroute = _rig_rescue(monitor, rec)
+                if reroute is not None:  # the rig moved on (a snap): continue from there
+                    q, d = reroute.state.q.copy(), reroute.state.d
+                    q_prev, d_prev, dd = None, d, dd0
+                    system.evaluate(q)
+                    system.factor()
+                    system.accept(q)
+                    neg = system.negative_eigenvalues
+                    rec.add(d, control.force(system), q, system.energy, 0, neg, neg)
+                    continue
                 status = (
                     f"not converged: displacement control failed near d = {d:.6g} m "
                     "(step size underflow; a snap-back? use method='mgdc')"
                 )
                 break
             continue
+        turn_candidate = None
         q_prev, d_prev = q, d
         q, d = q_try, target
         system.accept(q)
@@ -627,6 +651,7 @@ def follow_mgdc(
     d = 0.0
     rejected = 0
     total_iterations = 0
+    rescued = False
     while d < control.distance:
         if len(rec.rows["d"]) > max_steps:
             status = f"stopped: more than {max_steps} steps"
@@ -698,10 +723,23 @@ def follow_mgdc(
                         f"not converged: MGDC step size underflow near d = {d:.6g} m, "
                         f"F = {lam * unit:.6g} N"
                     )
+                    reroute = _rig_rescue(monitor, rec)
+                    if reroute is not None:  # the rig moved on: continue from there
+                        s_new = reroute.state
+                        q, lam, step_prev = s_new.q.copy(), s_new.lam, reroute.step
+                        system.accept(q)
+                        uP = system.solve(P)
+                        d = s_new.d
+                        rec.add(d, lam * unit, q, s_new.energy, 0, s_new.neg_force,
+                                s_new.neg_disp)
+                        s, status, rescued = s0, "ok", True
                     break
                 # restore the factorisation at the last converged state for the next try
                 system.evaluate(q)
                 system.factor()
+        if rescued:
+            rescued = False
+            continue
         if not converged:
             break
         # accepted: the system holds K at q_try
@@ -767,6 +805,27 @@ def _mgdc_crosses(system, uP, node_component, monitor, q, q_try):
                               orient * (1.0 if flex >= 0.0 else -1.0))
 
 
+def _force_turns(rec, F_new, noise):
+    """Does the force turn (dF changes sign, both changes above ``noise`` N) between the last
+    two path rows and a new state with force F_new?"""
+    F = rec.rows["F"]
+    if len(F) < 2:
+        return False
+    before, after = F[-1] - F[-2], F_new - F[-1]
+    return abs(before) > noise and abs(after) > noise and before * after < 0.0
+
+
+def _rig_rescue(monitor, rec):
+    """When a driver's steps underflow: let the monitor move the push on as a
+    displacement-controlled rig would (`BranchMonitor.rig_onwards`), if it may."""
+    if monitor is None or monitor.branch != "follow" or monitor.switches >= monitor.max_switches:
+        return None
+    reroute = monitor.rig_onwards()
+    if reroute is not None:
+        monitor.switches += 1
+    return reroute
+
+
 def _check_branch(branch):
     if branch not in ("follow", "primary"):
         raise ValueError(f"branch must be 'follow' or 'primary'; got {branch!r}")
@@ -778,4 +837,5 @@ def _monitor_info(info, monitor):
         info["branch"] = monitor.branch
         info["branch_switches"] = monitor.switches
         info["critical_seconds"] = monitor.seconds
+        info["rig_jumps"] = list(monitor.rig_jumps)
     return info

@@ -606,70 +606,85 @@ class Structure3D:
             return follow_mgdc(self, control, **options)
         return follow_displacement(self, control, **options)
 
-    def relax(self, q=None, moments=(), tol=1e-10, max_iter=200):
-        """Minimise the energy from the state ``q`` (default stress free) by damped Newton
-        (Levenberg–Marquardt shift when K is indefinite, energy decrease required), with
-        optional dead couples: ``moments`` = [(node_a, node_b, M N m, axis (3,))], each
-        acting on the edge from node_a to node_b, which must turn in the plane normal to the
-        axis. Returns (q, info). The frames are carried along after every step."""
+    def relax(self, q=None, moments=(), ramp=1, tol=1e-10, max_iter=100):
+        """Minimise the energy from the state ``q`` (default: stress free) by damped Newton
+        (a Levenberg–Marquardt shift where K is not positive definite; every step must lower
+        the energy), optionally under dead couples ``moments`` = [(node_a, node_b, M (N m),
+        axis (3,))], each on the edge from node_a to node_b, which must turn in the plane
+        normal to the axis. ``ramp``: the couples and the natural curvatures and twists are
+        raised to their values in this many equal stages (a homotopy from a nearby state).
+        The reference frames are carried along after every step. Returns (q, info).
+        Small problems only (dense linear algebra)."""
         from solver.banded import band_to_dense
 
-        q = self.initial_state() if q is None else np.array(q, dtype=float, copy=True)
+        q = self.initial_state() if q is None else self.state(self.positions_of(q),
+                                                              self.twist_of(q))
+        ramp = int(ramp)
+        if ramp < 1:
+            raise ValueError(f"ramp must be an integer >= 1; got {ramp!r}")
         sysm = self.reduced_system()
         length, fscale = self.scales()
+        natural = np.array(sysm.pair_params[:, 3:6], copy=True)
+        sysm.pair_params = np.array(sysm.pair_params, copy=True)
         loads = []
         for a, b, M, axis in moments:
             a = self._check_node(a, "moment node_a")
             b = self._check_node(b, "moment node_b")
             ax = _finite_array(axis, "moment axis", "a direction")
-            loads.append((a, b, float(M), ax / np.linalg.norm(ax)))
+            if ax.shape != (3,) or not np.linalg.norm(ax) > 0:
+                raise ValueError(f"moment axis must be a non-zero 3-vector; got {axis!r}")
+            loads.append((a, b, float(_finite_array(M, "moment M", "N m")), ax / np.linalg.norm(ax)))
 
-        def total(qv, with_derivatives):
+        def total(qv, f, with_derivatives):
             E = sysm.evaluate(qv)
             g = sysm.grad.copy()
             K = band_to_dense(sysm.band) if with_derivatives else None
+            X = self.positions_of(qv)
             for a, b, M, ax in loads:
-                X = self.positions_of(qv)
                 ge = np.empty(3)
                 he = np.empty((3, 3))
-                E += tip_moment_terms(X[b] - X[a], M, ax, ge, he)
-                ra = sysm.dof_map[3 * a: 3 * a + 3]
-                rb = sysm.dof_map[3 * b: 3 * b + 3]
-                for i in range(3):
-                    for s_i, r_i in ((-1.0, ra[i]), (1.0, rb[i])):
-                        if r_i < 0:
-                            continue
-                        g[r_i] += s_i * ge[i]
-                        if with_derivatives:
-                            for j in range(3):
-                                for s_j, r_j in ((-1.0, ra[j]), (1.0, rb[j])):
-                                    if r_j >= 0:
-                                        K[r_i, r_j] += s_i * s_j * he[i, j]
+                E += tip_moment_terms(X[b] - X[a], f * M, ax, ge, he)
+                dofs = [(-1.0, r) for r in sysm.dof_map[3 * a: 3 * a + 3]]
+                dofs += [(1.0, r) for r in sysm.dof_map[3 * b: 3 * b + 3]]
+                for i, (s_i, r_i) in enumerate(dofs):
+                    if r_i < 0:
+                        continue
+                    g[r_i] += s_i * ge[i % 3]
+                    if with_derivatives:
+                        for j, (s_j, r_j) in enumerate(dofs):
+                            if r_j >= 0:
+                                K[r_i, r_j] += s_i * s_j * he[i % 3, j % 3]
             return E, g, K
 
-        E, g, K = total(q, True)
-        shift = 0.0
-        it = 0
-        for it in range(1, max_iter + 1):
-            if np.max(np.abs(g)) <= tol * fscale:
-                break
-            while True:
-                eig_min = np.linalg.eigvalsh(K)[0]
-                mu = max(shift, -1.01 * eig_min if eig_min <= 0 else 0.0)
-                du = np.linalg.solve(K + mu * np.eye(K.shape[0]), -g)
-                scale = min(1.0, 0.1 * length / max(float(np.max(np.abs(du))), 1e-300))
-                q_try = q.copy()
-                sysm.increment(q_try, du, scale)
-                E_try, _, _ = total(q_try, False)
-                if E_try <= E + 1e-14 * abs(E) or np.max(np.abs(g)) < 1e-3 * fscale:
+        total_it = 0
+        for stage in range(1, ramp + 1):
+            f = stage / ramp
+            sysm.pair_params[:, 3:6] = f * natural
+            E, g, K = total(q, f, True)
+            shift = 0.0
+            for _ in range(max_iter):
+                if np.max(np.abs(g)) <= tol * fscale:
                     break
-                shift = max(4.0 * shift, 1e-6 * float(np.max(np.abs(np.diag(K)))))
-                if shift > 1e12 * float(np.max(np.abs(np.diag(K)))):
-                    raise RuntimeError("relax: no energy decrease along the gradient")
-            shift *= 0.25
-            q = q_try
-            sysm.accept(q)
-            E, g, K = total(q, True)
-        else:
-            raise RuntimeError(f"relax did not converge in {max_iter} iterations")
-        return q, {"iterations": it, "energy": E, "residual": float(np.max(np.abs(g)))}
+                diag = float(np.max(np.abs(np.diag(K))))
+                while True:
+                    eig_min = float(np.linalg.eigvalsh(K)[0])
+                    mu = max(shift, -1.01 * eig_min + 1e-9 * diag if eig_min <= 0 else 0.0)
+                    du = np.linalg.solve(K + mu * np.eye(K.shape[0]), -g)
+                    step = min(1.0, 0.1 * length / max(float(np.max(np.abs(du))), 1e-300))
+                    q_try = q.copy()
+                    sysm.increment(q_try, du, step)
+                    E_try = total(q_try, f, False)[0]
+                    if E_try <= E + 1e-12 * abs(E):
+                        break
+                    shift = max(4.0 * shift, 1e-8 * diag)
+                    if shift > 1e12 * diag:
+                        raise RuntimeError("relax: no energy decrease along the gradient")
+                shift *= 0.25
+                q = q_try
+                sysm.accept(q)
+                E, g, K = total(q, f, True)
+                total_it += 1
+            else:
+                raise RuntimeError(f"relax did not converge in {max_iter} iterations at stage "
+                                   f"{stage} of {ramp}")
+        return q, {"iterations": total_it, "energy": E, "residual": float(np.max(np.abs(g)))}

@@ -87,18 +87,24 @@ class Mesh3D:
         return e[i] if i < len(e) else -e[i - 1]
 
     def bond(self, node_a, node_b):
-        """Rigidly join two coincident nodes (`Structure3D.joint`), in the order whose coupled
-        edges are not antiparallel (a joint reads the angle between the edge into the first
-        node and the edge out of the second; two parallel rods bonded at nodes where both
-        start, or both end, have only antiparallel choices): then the nodes are tied
-        (positions shared), and their orientations are carried by the neighbouring joints.
-        Returns "joint" or "tie"."""
+        """Rigidly join two coincident nodes with `Structure3D.joint` in both orders that are
+        valid, so that the coupling is the same seen from either side.
+
+        A joint couples the edge of its first rod *into* the node with the edge of its second
+        rod *out of* it (reversed at a rod's end): one order alone ties a rod to the edges on
+        one side of the node only, and a structure that is mirror symmetric would respond
+        asymmetrically. An order whose two edges are antiparallel (two parallel rods that
+        both start, or both end, at the node) cannot be a joint; with no valid order the
+        nodes are tied (positions shared) and their orientations are carried by neighbouring
+        joints. Returns the number of joints added (0: tied)."""
+        added = 0
         for a, b in ((node_a, node_b), (node_b, node_a)):
-            if self._edge_dir(a, True) @ self._edge_dir(b, False) > -0.5:
+            if self._edge_dir(a, True) @ self._edge_dir(b, False) > -0.9:
                 self.joints.append((int(a), int(b)))
-                return "joint"
-        self.ties.append((int(node_a), int(node_b)))
-        return "tie"
+                added += 1
+        if not added:
+            self.ties.append((int(node_a), int(node_b)))
+        return added
 
     def rod(self, name) -> RodSpec:
         for r in self.rods:

@@ -169,6 +169,8 @@ def _one_state(args) -> int:
             _order(args.order, snapped, len(units))
         except ValueError as exc:
             raise CommandError(f"--order {args.order}: {exc} (e.g. --order 2,0)") from None
+    print(f"simulating {len(units)} units, snapping {sum(snapped)} of them one at a time ...",
+          flush=True)
     r = simulate_array(units, snapped, order=args.order, nodes=args.nodes, E=args.E)
     key = "".join("1" if s else "0" for s in snapped)
     print(f"state {key}: {len(units)} units, snapped in the order "

@@ -112,14 +112,12 @@ def run(args) -> int:
                                f"got {args.controls!r}") from None
     if not Path(args.target).is_file():
         raise CommandError(f"target file not found: {args.target}")
-    from snapmorph.commands._common import output_dir
-
-    output_dir(args.out)
-
     from design import inverse_design
     from design.lookup import load_map
+    from snapmorph.commands._common import output_dir
 
     dm = load_map(args.map)
+    output_dir(args.out)  # before the design: a folder that cannot be written fails at once
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the summary says it all, once
         d = inverse_design(args.target, t=args.t * 1e-3, w=args.w * 1e-3, controls=controls,

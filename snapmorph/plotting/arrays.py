@@ -89,7 +89,9 @@ def plot_fk_states(states: dict, path, *, title=None, target=None, placement=Non
     allp = np.vstack(pts) * 1e3
     lo, hi = allp.min(axis=0), allp.max(axis=0)
     pad = 0.06 * max((hi - lo).max(), 1e-9)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(3.3 * ncols, 2.8 * nrows + 0.9),
+    span = hi - lo + 2 * pad
+    row_h = float(np.clip(3.0 * span[1] / max(span[0], 1e-12), 1.0, 4.0)) + 0.7  # equal aspect
+    fig, axes = plt.subplots(nrows, ncols, figsize=(3.3 * ncols, row_h * nrows + 1.2),
                              squeeze=False, sharex=True, sharey=True)
     for ax, key in zip(axes.flat, keys):
         if target is not None:

@@ -75,11 +75,9 @@ def plot_unit(r, path):
     """One figure: the curve with (i)-(iii) marked, and the three deformed shapes."""
     g = r.geometry
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.4), constrained_layout=True)
-    draw_curve(a1, r, color="#0072B2")
-    a1.legend(handles=state_legend_handles(), fontsize=7, loc="upper right")
-    for key, (x, y) in state_points(r).items():
-        c, name = STATE_STYLE[key]
-        a1.annotate(name, (x, y), textcoords="offset points", xytext=(6, 6), color=c, fontsize=8)
+    draw_curve(a1, r, color="#0072B2", label="push test: force against apex displacement")
+    handles, _ = a1.get_legend_handles_labels()
+    a1.legend(handles=handles + state_legend_handles(), fontsize=7, loc="upper right")
     a1.set_title(f"L {g.L*1e3:g}, h {g.h*1e3:g}, t {g.t*1e3:g}, w {g.w*1e3:g}, b {g.b*1e3:g} mm: "
                  f"{r.status}", fontsize=10)
     draw_shapes(a2, r)

@@ -14,6 +14,16 @@ import fake_unit_solver as fake
 FAKE = "fake_unit_solver:solve"
 
 
+def fake_kind():
+    """The unit kind with only the point solver's own module hashed into the fingerprint: the
+    unit's sources (solver/, units/) may change while a test runs in a shared work tree."""
+    import dataclasses
+
+    from pipeline.solvers import get_spec
+
+    return dataclasses.replace(get_spec("unit"), sources=())
+
+
 def subprocess_env(**extra) -> dict:
     """Environment for subprocesses that must import the fake solver."""
     env = dict(os.environ)

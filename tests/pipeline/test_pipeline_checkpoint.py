@@ -11,7 +11,7 @@ import pytest
 import xarray as xr
 
 import fake_unit_solver as fake
-from pipeline_testing import FAKE, assert_matches_fake
+from pipeline_testing import FAKE, assert_matches_fake, fake_kind
 from pipeline.batch import solve_batch
 from pipeline.build import build_map, open_checkpoint
 from pipeline.checkpoint import checkpoint_dir
@@ -22,6 +22,7 @@ from pipeline.solvers import get_spec
 CI = preset("ci")
 COORDS = CI.points()
 KEYS = get_spec("unit").block_keys()
+KIND = fake_kind()
 BATCHES = (np.arange(0, 6), np.arange(6, 12), np.arange(12, 18))  # 18 of 24 points checkpointed
 
 
@@ -38,13 +39,13 @@ def load(path):
 def reference(tmp_path_factory):
     """An uninterrupted build of the CI grid with the fake solver."""
     out = tmp_path_factory.mktemp("ref") / "ci.nc"
-    build_map(CI, out, solve=FAKE, workers=1, progress=False)
+    build_map(CI, out, kind=KIND, solve=FAKE, workers=1, progress=False)
     return out
 
 
 def checkpointed(out, grid=CI, batches=BATCHES):
     """A checkpoint of `out` holding `batches`, as an interrupted build leaves it; their files."""
-    ckpt = open_checkpoint(out, grid, FAKE)
+    ckpt = open_checkpoint(out, grid, FAKE, kind=KIND)
     opts = grid.options
     files = [ckpt.write(solve_batch(idx, COORDS[idx], opts["b_over_L"], ckpt.meta["resolution"],
                                     opts["samples"], fake.solve)) for idx in batches]
@@ -130,7 +131,7 @@ def test_corrupted_checkpoint_is_refused_and_the_map_is_exact(kind, reference, t
     log = tmp_path / "calls.log"
     monkeypatch.setenv("FAKE_SOLVER_LOG", str(log))
     with pytest.warns(UserWarning, match=f"refusing checkpoint file .*{WHY[kind]}"):
-        report = build_map(CI, out, solve=FAKE, workers=1, progress=False)
+        report = build_map(CI, out, kind=KIND, solve=FAKE, workers=1, progress=False)
     assert report.refused, report.summary()
     solved = {[tuple(p) for p in COORDS].index(tuple(map(float, line.split())))
               for line in log.read_text().splitlines()}
@@ -146,7 +147,7 @@ def test_identical_duplicate_is_harmless(reference, tmp_path, monkeypatch):
     shutil.copy(files[0], files[0].with_name("batch-0000000-copy0000.npz"))
     log = tmp_path / "calls.log"
     monkeypatch.setenv("FAKE_SOLVER_LOG", str(log))
-    report = build_map(CI, out, solve=FAKE, workers=1, progress=False)
+    report = build_map(CI, out, kind=KIND, solve=FAKE, workers=1, progress=False)
     assert report.refused == [] and report.resumed == 18
     assert len(log.read_text().splitlines()) == 6
     assert sha(out) == sha(reference)
@@ -158,7 +159,7 @@ def test_nothing_is_deleted_when_the_written_map_fails_its_check(tmp_path, monke
 
     out = tmp_path / "ci.nc"
     checkpointed(out)
-    spec = dataclasses.replace(get_spec("unit"), validate_file="fake_unit_solver:refuse_map")
+    spec = dataclasses.replace(KIND, validate_file="fake_unit_solver:refuse_map")
     with pytest.raises(ValueError, match="refused by the reader"):
         build.build_map(CI, out, kind=spec, solve=FAKE, workers=1, progress=False)
     assert len(list(checkpoint_dir(out).glob("batch-*.npz"))) >= 3  # every batch kept

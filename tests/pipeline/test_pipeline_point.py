@@ -19,6 +19,7 @@ class FakeGeometry:
     w: float
     b: float
     E: float
+    joint_length: float | None = None
 
     def __post_init__(self):
         if self.h <= 0:
@@ -56,7 +57,8 @@ def ok_result(g, nodes):
     return types.SimpleNamespace(
         geometry=g, status="ok", status_code=0, bistable=True, F_cr=2.0, d_cr=0.004,
         d_unstable=0.01, d_second=0.03, S=0.09, theta_deg=35.0, energy_barrier=1e-3,
-        energy_stored=4e-4, self_standing=True, bifurcation=None, base_shape=raw)
+        energy_stored=4e-4, self_standing=True, bifurcation=None, base_shape=raw,
+        released={"S": 0.092, "theta_deg": 33.5, "theta_end_deg": 16.75, "base_shape": arc(33.5, 801) * g.L})
 
 
 @pytest.fixture

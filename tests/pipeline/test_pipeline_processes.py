@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline_testing import FAKE, REPO, assert_matches_fake, subprocess_env
+from pipeline_testing import FAKE, REPO, assert_matches_fake, fake_kind, subprocess_env
 from pipeline.build import build_map
 from pipeline.checkpoint import checkpoint_dir
 from pipeline.compare import compare_maps
@@ -57,7 +57,8 @@ def group_alive(pgid):
 
 def cli_build(out, *extra):
     return [sys.executable, "-m", "snapmorph", "maps", "build", "--grid", "ci", "--out", str(out),
-            "--solver", FAKE, "--no-progress", *extra]
+            "--solver", FAKE, "--no-progress", "--max-failed", "2",
+            "--kind", "pipeline_testing:fake_kind", *extra]
 
 
 def finished_indices(out):
@@ -105,9 +106,10 @@ def test_kill_9_and_resume(tmp_path):
     assert set(logged_points(log1)) >= finished
 
     reference = tmp_path / "reference.nc"
-    build_map(CI, reference, solve=FAKE, workers=2, progress=False)
+    build_map(CI, reference, kind=fake_kind(), solve=FAKE, workers=2, progress=False)
     resumed, expected = load(out), load(reference)
     assert compare_maps(expected, resumed, rtol=0, atol=0) == []
+    assert out.read_bytes() == reference.read_bytes()  # the same file, byte for byte
     assert_matches_fake(resumed)
     # the map records the build's start (time, commit), not the restart's; the rest is equal
     # (the lead may commit while this runs, so the reference build's commit can differ)
@@ -147,8 +149,8 @@ def external_cluster(tmp_path):
 @pytest.mark.slow
 def test_build_on_an_external_cluster(external_cluster, tmp_path, monkeypatch):
     out = tmp_path / "ci.nc"
-    report = build_map(CI, out, solve=FAKE, scheduler=external_cluster, workers=2, progress=False,
-                       timeout=60)
+    report = build_map(CI, out, kind=fake_kind(), solve=FAKE, scheduler=external_cluster, workers=2,
+                       progress=False, timeout=60)
     assert report.workers == 2
     assert_matches_fake(load(out))
     worker_log = tmp_path / "external-workers.log"  # only the external workers log

@@ -42,7 +42,9 @@ def test_stored_values_are_the_normalised_simulation(ci_map):
     assert int(stored.status) == 0
     res = int(ds.attrs["resolution"])
     for L, E in ((0.1, 2.2e9), (0.25, 3.0e9)):
-        g = unit.UnitGeometry(L=L, h=h * L, t=t * L, w=w * L, b=0.0, E=E)
+        # the model options the map records (its actuator joint) scale with L too
+        g = unit.UnitGeometry(L=L, h=h * L, t=t * L, w=w * L, b=0.0, E=E,
+                              joint_length=float(ds.attrs["joint_length_over_L"]) * L)
         r = unit.simulate_unit(g, nodes=res)
         EI = E * (w * L) * (t * L) ** 3 / 12
         assert r.F_cr * L**2 / EI == pytest.approx(float(stored.F_cr), rel=1e-5)

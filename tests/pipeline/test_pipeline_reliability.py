@@ -10,11 +10,12 @@ import pytest
 import xarray as xr
 
 import fake_unit_solver as fake
-from pipeline_testing import FAKE, REPO, assert_matches_fake, subprocess_env
+from pipeline_testing import FAKE, REPO, assert_matches_fake, fake_kind, subprocess_env
 from pipeline.build import allowed_failures, build_map, parse_max_failed
 from pipeline.checkpoint import checkpoint_dir
 from pipeline.grid import preset
 from pipeline.schema import TIMEOUT
+from pipeline.solvers import get_spec
 from snapmorph.cli import main
 
 CI = preset("ci")
@@ -76,23 +77,48 @@ def test_watchdog_stops_a_solver_that_ignores_its_time_limit(tmp_path, monkeypat
 
 # -- idempotent, reproducible builds -------------------------------------------------------------
 
+# The unit kind hashes solver/ and units/, which other work in this tree may be editing while the
+# tests run; these tests hash only the fake solver's module (the unit's own sources are listed
+# in test_unit_kind_hashes_the_model_source).
+FAKE_KIND = fake_kind()
+
+
+def test_unit_kind_hashes_the_model_source():
+    from pipeline.fingerprint import solver_modules, source_files
+
+    names = {rel for rel, _ in source_files(solver_modules(get_spec("unit"), fake.solve))}
+    assert {"solver/unit.py", "pipeline/point.py", "pipeline/schema.py", "pipeline/dataset.py",
+            "fake_unit_solver.py"} <= names
+    assert any(n.startswith("units/") for n in names)
+
+
 def test_up_to_date_map_is_left_alone_and_force_rebuilds_the_same_bytes(tmp_path, monkeypatch):
+    import pipeline.build
+
     out = tmp_path / "ci.nc"
-    build_map(CI, out, solve=FAKE, workers=2, progress=False)
+    build_map(CI, out, kind=FAKE_KIND, solve=FAKE, workers=2, progress=False)
     first, mtime = sha(out), out.stat().st_mtime_ns
     log = tmp_path / "calls.log"
     monkeypatch.setenv("FAKE_SOLVER_LOG", str(log))
-    report = build_map(CI, out, solve=FAKE, workers=2, progress=False)
+    report = build_map(CI, out, kind=FAKE_KIND, solve=FAKE, workers=2, progress=False)
     assert report.up_to_date and report.computed == 0 and not log.exists()
     assert out.stat().st_mtime_ns == mtime and "is up to date" in report.summary()
     assert report.failed == 2  # read from the file: the exit policy still applies
-    report = build_map(CI, out, solve=FAKE, workers=1, batch_size=5, progress=False, force=True)
+    report = build_map(CI, out, kind=FAKE_KIND, solve=FAKE, workers=1, batch_size=5, progress=False,
+                       force=True)
     assert not report.up_to_date and report.computed == CI.size
     assert sha(out) == first  # bit-identical, whatever the workers and batches
-    # other inputs (here the solver resolution) rebuild, saying why
+    # other inputs rebuild, saying why: the solver resolution, the solver's source
     with pytest.warns(UserWarning, match="inputs differ .*model_options"):
-        report = build_map(CI.with_resolution(40), out, solve=FAKE, workers=1, progress=False)
+        report = build_map(CI.with_resolution(40), out, kind=FAKE_KIND, solve=FAKE, workers=1,
+                           progress=False)
     assert report.computed == CI.size and sha(out) != first
+    build_map(CI, out, kind=FAKE_KIND, solve=FAKE, workers=1, progress=False, force=True)
+    assert sha(out) == first
+    monkeypatch.setattr(pipeline.build, "source_hash", lambda modules: "0" * 64)
+    with pytest.warns(UserWarning, match="inputs differ .*solver_source_sha256"):
+        report = build_map(CI, out, kind=FAKE_KIND, solve=FAKE, workers=1, progress=False)
+    assert report.computed == CI.size
 
 
 def test_keep_solve_time(tmp_path):
