@@ -4,6 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 JOBS   ?=
+MAPS_FLAGS ?=
 
 .DEFAULT_GOAL := help
 .PHONY: help venv test test-fast bench maps maps-ci maps-accuracy check-maps figures test-nojit clean
@@ -29,11 +30,11 @@ test-fast: $(STAMP)  ## run the tests not marked slow
 bench: $(STAMP)  ## print speed figures (solver, unit, pipeline)
 	$(PY) bench/run.py
 
-maps: $(STAMP)  ## build the full default design map (the main job) into maps/data/
-	$(PY) -m snapmorph maps build --grid default --out maps/data/default.nc $(if $(JOBS),--workers $(JOBS),)
+maps: $(STAMP)  ## build the default design map into maps/data/ (no-op when up to date; MAPS_FLAGS=--force rebuilds)
+	$(PY) -m snapmorph maps build --grid default --out maps/data/default.nc $(if $(JOBS),--workers $(JOBS),) $(MAPS_FLAGS)
 
-maps-ci: $(STAMP)  ## rebuild the small CI grid into maps/data/ci.nc
-	$(PY) -m snapmorph maps build --grid ci --out maps/data/ci.nc
+maps-ci: $(STAMP)  ## build the small CI grid into maps/data/ci.nc (no-op when up to date)
+	$(PY) -m snapmorph maps build --grid ci --out maps/data/ci.nc $(MAPS_FLAGS)
 
 check-maps: $(STAMP)  ## recompute the CI grid and compare it with the committed snapshot
 	$(PY) -m snapmorph maps check --grid ci --against maps/data/ci.nc

@@ -3,21 +3,25 @@
     from design import Unit, forward_kinematics, inverse_design
     u = Unit(L=0.1, h=0.02, t=0.5e-3, w=5e-3, side=+1)          # SI units
     xy = forward_kinematics([u, u, u], snapped=[False, True, False])
-    d = inverse_design(points_xy, t=0.5e-3, w=5e-3)   # d.units, d.predicted, d.max_deviation
+    d = inverse_design(points_xy, t=0.5e-3, w=5e-3, tol=0.01, verify=True)   # any planar curve
+    d.units, d.predicted, d.deviations, d.placement, d.met, d.verification
 
 Unit shapes come from the design maps (`maps.DesignMap`) unless `source="simulate"`.
 """
 
 from design.biarcs import Arc, biarc, biarcs
-from design.inverse import Design, inverse_design
+from design.inverse import Design, inverse_design, verify_design
 from design.kinematics import all_states, chain, forward_kinematics, parse_state
 from design.lookup import MapLookup
+from design.target_io import read_target
+from design.targets import Target
 from design.units import Unit, read_units_csv, spacer, write_units_csv
 
 __all__ = [
     "Arc",
     "Design",
     "MapLookup",
+    "Target",
     "Unit",
     "all_states",
     "biarc",
@@ -26,7 +30,9 @@ __all__ = [
     "forward_kinematics",
     "inverse_design",
     "parse_state",
+    "read_target",
     "read_units_csv",
     "spacer",
+    "verify_design",
     "write_units_csv",
 ]

@@ -79,8 +79,12 @@ def plot_study(study, path, title: str | None = None, ncols: int = 4, placement=
         ax.set_ylim(lo[1] - pad, hi[1] + pad)
         ax.set_aspect("equal")
         r = rows[key]
-        dev = "" if math.isnan(r.dev_fk) else f"  dev {100 * r.dev_fk:.2f} %"
-        ax.set_title(f"{key}{dev}" + ("" if r.status == "ok" else f" ({r.status})"), fontsize=8)
+        if r.status == "ok":
+            dev = "" if math.isnan(r.dev_fk) else f"  dev {100 * r.dev_fk:.2f} %"
+            ax.set_title(f"{key}{dev}", fontsize=8)
+        else:  # the reason is in the table; a short word here keeps the titles apart
+            short = r.status.split(":")[0].split("(")[0].strip()[:28]
+            ax.set_title(f"{key}: {short} (see table)", fontsize=8, color="#D55E00")
         ax.tick_params(labelsize=6)
     for ax in axes[-1, :]:
         ax.set_xlabel("x (mm)", fontsize=7)

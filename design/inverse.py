@@ -30,8 +30,7 @@ from design.biarcs import Arc, biarcs, sample_arcs
 from design.kinematics import chain
 from design.lookup import MapLookup
 from design.targets import (Target, arc_length, best_rigid_placement, check_points, deviation,
-                            deviation_vector, place_rigid,
-                            read_target_csv, resample, self_intersects)
+                            deviation_vector, place_rigid, resample, self_intersects)
 from design.units import Unit
 
 
@@ -1098,7 +1097,7 @@ class _Fit:
         R = self._residual(self.m.assemble(Z, T, S, A))
         return ((R[1:] - R[0]) / h[:, None]).T
 
-    def solve(self, v0, weights=None, max_nfev=60):
+    def solve(self, v0, weights=None, max_nfev=25):
         from scipy.optimize import least_squares
 
         lo, hi = self.bounds()
@@ -1108,8 +1107,9 @@ class _Fit:
         else:
             fun = lambda v: weights * self.residuals(v)  # noqa: E731
             jac = lambda v: weights[:, None] * self.jac(v)  # noqa: E731
-        sol = least_squares(fun, v0, jac=jac, bounds=(lo, hi), x_scale="jac", xtol=1e-10,
-                            ftol=1e-10, gtol=1e-10, max_nfev=max_nfev, method="trf")
+        # the residuals are distances of ~1e-3 of the length: 1e-6 relative is plenty
+        sol = least_squares(fun, v0, jac=jac, bounds=(lo, hi), x_scale="jac", xtol=1e-7,
+                            ftol=1e-6, gtol=1e-8, max_nfev=max_nfev, method="trf")
         return sol.x, int(sol.nfev)
 
 
@@ -1231,16 +1231,18 @@ def _curve_design(target: Target, t, w, dm, tol, placement, L_range, hL_range, m
         v0 = fit.pack(L, hL, target.start, target.start_angle)
         r0 = fit.residuals(v0)
         v, nfev = fit.solve(v0)
-        # minimax polish (Lawson): reweight towards the largest distances
+        # minimax polish (Lawson): reweight towards the largest distances, unless the
+        # arc-length-matched distances (an upper bound of the deviation, nearly) are already
+        # well inside tol
         weights = np.ones_like(r0)
         for _ in range(3):
             r = fit.residuals(v)
             d = np.hypot(r[0::2], r[1::2])
-            if not np.all(np.isfinite(d)) or d.max() <= 0:
+            if not np.all(np.isfinite(d)) or d.max() <= 0.5 * tol:
                 break
             weights = weights * np.repeat(np.maximum(d / d.max(), 0.05), 2)
             weights = weights / np.sqrt(np.mean(weights ** 2))
-            v2, n2 = fit.solve(v, weights=np.sqrt(weights), max_nfev=30)
+            v2, n2 = fit.solve(v, weights=np.sqrt(weights), max_nfev=20)
             nfev += n2
             if np.max(np.hypot(*fit.residuals(v2).reshape(-1, 2).T)) < d.max():
                 v = v2

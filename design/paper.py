@@ -164,3 +164,80 @@ def write_figures(out, design_map=None) -> list[Path]:
         paths.append(write_units_csv(d.units, out / f"inverse_{name}" / "units.csv"))
         paths += write_drawings(d.units, out / f"inverse_{name}", bed_length_mm=600.0)
     return paths
+
+
+# --- the paper's angle convention (issue 11, item 4) ------------------------------------------
+def design_S_paper(design_map=None, **shape):
+    """The S designed as the paper did: one unit per circular segment, entering the map with
+    theta_end (`inverse_design(..., theta_convention="paper")`); reproduces Table 3's S unit.
+    The design over-curves about twice (its notes say so)."""
+    import warnings
+
+    dm = design_map if design_map is not None else load_map()
+    pts, ang = s_control_points(**shape)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the note in the design says it
+        return inverse_design(pts, t=T, w=W, tangents=ang, design_map=dm,
+                              theta_convention="paper")
+
+
+def conventions(design_map=None, verify: bool = True) -> dict:
+    """{"paper": design, "ours": design} of the paper's S, by the paper's convention (theta_end,
+    Table 3) and by ours (θ, tolerance-driven), each simulated as a whole array when verify."""
+    from design.inverse import verify_design
+
+    dm = design_map if design_map is not None else load_map()
+    pts, ang = s_control_points()
+    out = {"paper": design_S_paper(dm),
+           "ours": inverse_design(pts, t=T, w=W, tangents=ang, design_map=dm)}
+    if verify:
+        for d in out.values():
+            verify_design(d)
+    return out
+
+
+def conventions_table(designs: dict) -> str:
+    """Text: units, h/L, predicted and simulated deviation of the two conventions, Table 3."""
+    lines = [f"{'convention':<10} {'arched (L, h) mm':<22} {'h/L':>6} {'turn/unit':>9} "
+             f"{'predicted':>9} {'simulated':>9}"]
+    for name, d in designs.items():
+        arched = [u for u in d.units if not u.is_spacer]
+        u = arched[0]
+        turns = np.degrees(np.diff(d._chain.angles))
+        turn = max(abs(x) for x in turns)
+        sim = (f"{100 * d.verification['deviations']['best'][0]:8.1f}%"
+               if d.verification is not None else "        -")
+        lines.append(f"{name:<10} {f'({u.L * 1e3:.1f}, {u.h * 1e3:.1f}) x {len(arched)}':<22} "
+                     f"{u.h / u.L:6.3f} {turn:8.1f}° {100 * d.max_deviation:8.1f}% {sim}")
+    lines.append(f"Table 3 S: ({TABLE3_S[0]}, {TABLE3_S[1]}) mm, h/L = "
+                 f"{TABLE3_S[1] / TABLE3_S[0]:.3f}; deviations are % of the target length "
+                 "(best rigid placement)")
+    return "\n".join(lines)
+
+
+def plot_conventions(designs: dict, path) -> Path:
+    """Side by side: the S designed by the paper's convention and by ours; target, predicted
+    (map) and simulated whole array for each."""
+    from design.plots import _plt, _save
+
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(designs), figsize=(6 * len(designs), 6), squeeze=False)
+    for ax, (name, d) in zip(axes[0], designs.items()):
+        T_ = d.target * 1e3
+        ax.plot(T_[:, 0], T_[:, 1], "-", color="0.6", lw=5, alpha=0.6, label="target")
+        P = d.predicted * 1e3
+        ax.plot(P[:, 0], P[:, 1], "-", color="C0", lw=1.5, label="predicted (map)")
+        title = (f"{'paper convention (theta_end), Table 3' if name == 'paper' else 'our convention (θ)'}"
+                 f"\npredicted {100 * d.max_deviation:.1f} %")
+        if d.verification is not None:
+            Q = d.verification["xy"] * 1e3
+            ax.plot(Q[:, 0], Q[:, 1], ":", color="C3", lw=2, label="simulated array")
+            title += f", simulated {100 * d.verification['max_deviation']:.1f} %"
+        u = next(u for u in d.units if not u.is_spacer)
+        title += f" of the length\nunits (L, h) = ({u.L * 1e3:.1f}, {u.h * 1e3:.1f}) mm"
+        ax.set_title(title, fontsize=9)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("x (mm)")
+        ax.set_ylabel("y (mm)")
+        ax.legend(fontsize=8, loc="lower right")
+    return _save(fig, path)

@@ -25,7 +25,8 @@ CAPTIONS = {
 
 def write_gallery(folder) -> Path:
     """Write `folder/index.md` listing every figure (PNG, embedded) and table (Markdown, linked)
-    in `folder`, in name order; returns its path."""
+    in `folder`: the paper's figures in the paper's order, then any other in name order;
+    returns its path."""
     folder = Path(folder)
     lines = ["# snapmorph figures", "",
              "Written by `make figures` (`snapmorph figures --out figures`). Lengths in mm unless "
@@ -35,7 +36,9 @@ def write_gallery(folder) -> Path:
     if tables:
         lines += ["## Tables", ""] + [f"- [{t.stem}]({t.name})" for t in tables] + [""]
     lines += ["## Figures", ""]
-    for png in sorted(folder.glob("*.png")):
+    pngs = {p.stem: p for p in folder.glob("*.png")}
+    order = [s for s in CAPTIONS if s in pngs] + sorted(set(pngs) - set(CAPTIONS))
+    for png in (pngs[s] for s in order):
         caption = CAPTIONS.get(png.stem, "")
         lines += [f"### {png.stem}", ""]
         if caption:

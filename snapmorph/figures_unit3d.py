@@ -30,13 +30,15 @@ def _draw_rods(ax, rods, color, lw=1.0, alpha=1.0):
 
 
 def _equal_3d(ax, pts):
+    """Axes limits around ``pts`` (m) with one scale on all three axes (mm)."""
     pts = np.concatenate([np.asarray(p).reshape(-1, 3) for p in pts]) * 1e3
     lo, hi = pts.min(axis=0), pts.max(axis=0)
-    c, r = 0.5 * (lo + hi), 0.5 * float(np.max(hi - lo))
-    ax.set_xlim(c[0] - r, c[0] + r)
-    ax.set_ylim(c[1] - r, c[1] + r)
-    ax.set_zlim(c[2] - r, c[2] + r)
-    ax.set_box_aspect((1, 1, 1))
+    pad = 0.03 * float(np.max(hi - lo))
+    lo, hi = lo - pad, hi + pad
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_zlim(lo[2], hi[2])
+    ax.set_box_aspect(tuple(hi - lo))
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.set_zlabel("z (mm)")

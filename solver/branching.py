@@ -94,7 +94,7 @@ class BranchMonitor:
 
     def __init__(self, structure, control, branch, tol, fscale, length, nominal_step,
                  system=None, switch_size=0.5, max_switches=8, max_iter=25, load_unit=1.0,
-                 rig_step=None):
+                 rig_step=None, prefer_rig=False):
         if branch not in BRANCHES:
             raise ValueError(f"branch must be one of {BRANCHES}; got {branch!r}")
         self.structure = structure
@@ -110,7 +110,9 @@ class BranchMonitor:
         self.load_unit = float(load_unit)
         self.rig_step = None if rig_step is None else float(rig_step)
         self._held = None
-        self.rig_jumps: list[float] = []  # d (m) where `rig_onwards` moved the path on
+        self.prefer_rig = bool(prefer_rig)
+        self._switched_at: list[np.ndarray] = []  # states of the points switched at
+        self.rig_jumps: list[float] = []  # d (m) where the path jumped as a rig snaps
         self._system = system
         self._P = None
         self.points: list[CriticalPoint] = []
@@ -216,10 +218,26 @@ class BranchMonitor:
         following branches; otherwise leave the system at ``b``."""
         reroute = None
         if self.branch == "follow" and self.switches < self.max_switches:
-            if self.rig_step is not None and self.control_axis is not None:
-                reroute = self._rig_switch(a, c)
-            if reroute is None:
-                reroute = self._switch(a, c, phi, self.switch_size * self.nominal_step)
+            # Which way on. The rig (`_rig_switch`): the pushed node moves on and the
+            # structure settles into a stable state, as under a displacement-controlled
+            # rig; it copes with several modes crossing at once (symmetric structures),
+            # which the one-mode tangent plane (`_switch`) cannot. When the rig would
+            # jump (the branch through the point turns back in d), MGDC takes the tangent
+            # plane instead and follows the snap-back; displacement control jumps. At a
+            # point switched at before, the tangent plane would loop between branches (a
+            # wrong reversal): the rig then moves on, jumping if it must.
+            eps = self.switch_size * self.nominal_step
+            rig_ok = self.rig_step is not None and self.control_axis is not None
+            near = 4.0 * max(eps, self.rig_step or 0.0)
+            uc = self.system.reduced(c.q)
+            repeat = any(float(np.linalg.norm(uc - self.system.reduced(q))) <= near
+                         for q in self._switched_at)
+            if rig_ok:
+                reroute = self._rig_switch(a, c, allow_jump=True if repeat else None)
+            if reroute is None and not repeat:
+                reroute = self._switch(a, c, phi, eps)
+            if reroute is not None:
+                self._switched_at.append(c.q.copy())
         if reroute is None:
             self._restore(b.q)
             return None
@@ -387,14 +405,13 @@ class BranchMonitor:
         c = self.history[-1]
         a = self.history[-2] if len(self.history) > 1 else c
         t0 = time.perf_counter()
-        reroute = self._rig_switch(a, c)
+        reroute = self._rig_switch(a, c, allow_jump=True)
         self.seconds += time.perf_counter() - t0
         if reroute is not None:
-            self.rig_jumps.append(float(c.d))
             self.history = [c, reroute.state]
         return reroute
 
-    def _rig_switch(self, a, c):
+    def _rig_switch(self, a, c, allow_jump=None):
         """What a displacement-controlled rig does at the bifurcation point c (reached from
         the state a): the pushed node is moved on to d_c + rig_step and the structure settles
         into a stable equilibrium there. Newton from the point (shifted along the arriving
@@ -403,6 +420,8 @@ class BranchMonitor:
         energy (`_settle`). Every branch through the point is covered whatever the
         multiplicity (a symmetric structure may have several modes crossing at once), and
         the new state lies ahead in d. Returns a `Reroute` or None (then `_switch`)."""
+        if allow_jump is None:
+            allow_jump = self.prefer_rig  # a displacement-controlled path is a rig
         ctl, axis = self.control, self.control_axis
         sysd = self.held_system
         delta = self.rig_step
@@ -415,6 +434,24 @@ class BranchMonitor:
         if not self._settle(sysd, q):
             return None
         F = ctl.force(sysd)
+        # Did the structure stay on a branch through c, or jump to a far one (a branch
+        # through c that turns back in d: the rig snaps)? Back at d_c, Newton from the new
+        # state lands on c itself when the branch passes through it, on the far branch
+        # (as far from c as the new state) after a jump.
+        gap = float(np.linalg.norm(q - c.q))
+        back = q.copy()
+        back[held] = q0[held] + ctl.direction[axis] * c.d
+        from solver.continuation import _newton  # (a cycle at import time otherwise)
+
+        it = _newton(sysd, back, 0.0, None, self.tol * self.fscale, 1e-11 * self.length,
+                     self.max_iter, 0.25 * self.length)
+        jump = it < 0 or float(np.linalg.norm(back - c.q)) > 0.5 * gap
+        if jump and not allow_jump:
+            return None
+        if jump:
+            self.rig_jumps.append(float(c.d))
+        sysd.evaluate(q)
+        sysd.factor()
         sysm, P = self.system, self.P
         self._restore(q)
         if not sysm.factor_ok:

@@ -100,6 +100,10 @@ class Structure:
         self._fixed: dict[int, set[int]] = {}
         self._merges: list[tuple[int, int]] = []
         self._rigid_groups: list[list[int]] = []
+        # clamps: one record per clamped side, each with a ghost node appended after the
+        # real nodes in the state vector (see `clamp`)
+        self._clamps: list[dict] = []
+        self._replaced_bends: set[int] = set()
         self._cache = None
 
     # ------------------------------------------------------------------ building
@@ -164,9 +168,23 @@ class Structure:
         return rod
 
     # ------------------------------------------------------------------ problem interface
+    @property
+    def _n_total(self) -> int:
+        """Real nodes plus the clamps' ghost nodes (held or moving with their node)."""
+        return self.n_nodes + len(self._clamps)
+
+    def _ghost_positions(self, X=None):
+        """(n_clamps, 2) reference positions of the ghost nodes, m."""
+        if not self._clamps:
+            return np.zeros((0, 2))
+        X = self.reference_positions if X is None else X
+        return np.array([X[c["node"]] + c["offset"] for c in self._clamps], dtype=float)
+
     def initial_state(self) -> np.ndarray:
-        """The stress-free full state vector q0 (2 n_nodes,) m: a fresh copy every call."""
-        return self.reference_positions.reshape(-1).copy()
+        """The stress-free full state vector q0 (2 n_nodes + 2 n_ghosts,) m: node positions,
+        then the clamps' ghost nodes (see `clamp`); a fresh copy every call."""
+        X = self.reference_positions
+        return np.concatenate([X, self._ghost_positions(X)]).reshape(-1).copy()
 
     def node_dofs(self, node) -> np.ndarray:
         """(2,) int64 indices into the state vector of ``node``'s x and z."""
@@ -175,7 +193,7 @@ class Structure:
 
     def positions_of(self, q) -> np.ndarray:
         """(n_nodes, 2) node positions (m) held in the state vector ``q`` (a view)."""
-        return np.asarray(q).reshape(-1, 2)
+        return np.asarray(q)[: 2 * self.n_nodes].reshape(-1, 2)
 
     def state_fields(self, q) -> dict:
         """Per-state arrays recorded on a path besides positions: none for planar rods."""
@@ -218,6 +236,11 @@ class Structure:
                 new.tie(a, b)
         for (a, b), (k, _, _) in zip(self._spring_nodes, self._spring_params):
             new.tie(a, b, method="spring", stiffness=k)
+        done = set()
+        for c in self._clamps:
+            if c["group"] not in done:
+                done.add(c["group"])
+                new.clamp(c["node"], toward=c["toward"], hold_position=c["hold_position"])
         return new
 
     def min_thickness(self) -> float:
@@ -233,11 +256,82 @@ class Structure:
         return node
 
     def fix(self, node, components="xz"):
-        """Hold the displacement of ``node`` at zero in "x", "z" or "xz"."""
+        """Hold the displacement of ``node`` at zero in "x", "z" or "xz".
+
+        DER convention: a rod's tangent lives on its edges (a bending node measures the
+        turning between its two edges). Fixing the first two nodes of a rod therefore holds
+        the tangent of the first edge, i.e. at the edge's midpoint, half an edge into the
+        rod: the clamp sits ds/2 away from node 0 and results converge only as O(1/N).
+        `clamp` holds position and tangent at exactly the node (O(1/N^2))."""
         node = self._check_node(node)
         if components not in _COMPONENTS:
             raise ValueError(f"components must be 'x', 'z' or 'xz'; got {components!r}")
         self._fixed.setdefault(node, set()).update(_COMPONENTS[components])
+        self._cache = None
+
+    def clamp(self, node, toward, hold_position=True, tangent=None):
+        """Clamp ``node``: hold its tangent (and, with ``hold_position``, its position) at
+        exactly the node.
+
+        ``toward``: the node's neighbour along its rod (tells which rod, and for an end node
+        which side is the rod). The tangent held is the reference shape's tangent at the
+        node (second-order estimate through three nodes), or ``tangent`` (a 2-vector).
+        Each clamped side gets a ghost node one edge beyond the node along the tangent,
+        held in place (or translating with the node when ``hold_position`` is False: a
+        sliding clamp, rotation held only); the bending node at ``node`` then measures the
+        turning between the held tangent and the real edge over the real half edge only
+        (stiffness 2 EI / l). An interior node is clamped on both sides (its own bending
+        term replaced by the two one-sided ones). The ghosts are internal: positions,
+        paths and `n_nodes` show real nodes only.
+        """
+        node = self._check_node(node)
+        toward = self._check_node(toward, "toward")
+        found = None
+        for rod in self.rods:
+            idx = np.flatnonzero(rod.nodes == node)
+            jdx = np.flatnonzero(rod.nodes == toward)
+            if idx.size and jdx.size and abs(int(idx[0]) - int(jdx[0])) == 1:
+                found = (rod, int(idx[0]))
+        if found is None:
+            raise ValueError(f"toward ({toward}) must be a neighbour of node {node} along its rod")
+        if any(c["node"] == node for c in self._clamps):
+            raise ValueError(f"node {node} is clamped already")
+        rod, i = found
+        X = self._positions[self.rods.index(rod)]
+        n = len(rod.nodes)
+        forward = rod.nodes[i + 1] == toward if i + 1 < n else False
+        if tangent is None:
+            t = _tangent_estimate(X, i)
+        else:
+            t = np.asarray(tangent, dtype=float).reshape(-1)
+            if t.shape != (2,) or not np.all(np.isfinite(t)) or not np.any(t):
+                raise ValueError(f"tangent must be a finite non-zero (x, z) vector; got {tangent!r}")
+        t = t / np.linalg.norm(t)
+        if not forward:
+            t = -t  # t points from the node along the rod towards `toward`
+        if np.dot(t, X[i + 1] - X[i] if forward else X[i - 1] - X[i]) <= 0.0:
+            raise ValueError("tangent points away from the rod at the clamped node")
+        group = len(self._clamps)
+        sides = []
+        # the side towards `toward`, and for an interior node the other side too
+        other = i - 1 if forward else i + 1
+        for j, sgn in ((i + 1 if forward else i - 1, 1.0), (other, -1.0)):
+            if not 0 <= j < n:
+                continue
+            length = float(np.linalg.norm(X[j] - X[i]))
+            edge = min(i, j)
+            EI = float(rod.EI[edge, 0 if j > i else 1])  # the half edge next to the node
+            # ghost one edge length behind the node, opposite to the real edge's side
+            direction = t if sgn > 0 else -t
+            offset = -length * direction
+            sides.append(dict(node=node, neighbour=int(rod.nodes[j]), offset=offset,
+                              stiffness=2.0 * EI / length, group=group, toward=toward,
+                              hold_position=bool(hold_position)))
+        self._clamps.extend(sides)
+        if len(sides) == 2:
+            self._replaced_bends.add(node)
+        if hold_position:
+            self._fixed.setdefault(node, set()).update((0, 1))
         self._cache = None
 
     def rigid(self, nodes):
@@ -300,11 +394,31 @@ class Structure:
                 np.array(self._spring_nodes, dtype=np.int64).reshape(-1, 2)
             )
             springs_p = np.array(self._spring_params, dtype=float).reshape(-1, 3)
+            bend_n = cat(self._bend_nodes, (0, 3), np.int64)
+            bend_p = cat(self._bend_params, (0, 2), float)
+            if self._clamps:
+                keep = ~np.isin(bend_n[:, 1], list(self._replaced_bends))
+                bend_n, bend_p = bend_n[keep], bend_p[keep]
+                X = self.reference_positions
+                G = self._ghost_positions(X)
+                extra_n, extra_p = [], []
+                for k, c in enumerate(self._clamps):
+                    g = self.n_nodes + k
+                    # ordered ghost -> node -> neighbour or neighbour -> node -> ghost,
+                    # along the rod's node order (the curvature's sign convention)
+                    if c["neighbour"] > c["node"]:
+                        tri, pts = (g, c["node"], c["neighbour"]), (G[k], X[c["node"]], X[c["neighbour"]])
+                    else:
+                        tri, pts = (c["neighbour"], c["node"], g), (X[c["neighbour"]], X[c["node"]], G[k])
+                    extra_n.append(tri)
+                    extra_p.append((c["stiffness"], float(_turning_curvatures(np.array(pts))[0])))
+                bend_n = np.ascontiguousarray(np.concatenate([bend_n, np.array(extra_n, dtype=np.int64)]))
+                bend_p = np.ascontiguousarray(np.concatenate([bend_p, np.array(extra_p, dtype=float)]))
             self._cache = (
                 cat(self._stretch_nodes, (0, 2), np.int64),
                 cat(self._stretch_params, (0, 2), float),
-                cat(self._bend_nodes, (0, 3), np.int64),
-                cat(self._bend_params, (0, 2), float),
+                bend_n,
+                bend_p,
                 np.ascontiguousarray(springs_n),
                 np.ascontiguousarray(springs_p),
             )
@@ -312,19 +426,26 @@ class Structure:
 
     def supernodes(self):
         """Node -> representative of the group of nodes that share displacements."""
-        uf = _UnionFind(self.n_nodes)
+        uf = _UnionFind(self._n_total)
         for a, b in self._merges:
             uf.union(a, b)
-        return np.array([uf.find(i) for i in range(self.n_nodes)], dtype=np.int64)
+        for k, c in enumerate(self._clamps):
+            if not c["hold_position"]:  # a sliding clamp's ghost translates with its node
+                uf.union(c["node"], self.n_nodes + k)
+        return np.array([uf.find(i) for i in range(self._n_total)], dtype=np.int64)
 
     def fixed_components(self, rep=None):
-        """(n_nodes, 2) bool: component held by a support (shared across merged nodes)."""
+        """(n_nodes, 2) bool: component held by a support (shared across merged nodes); rows
+        past n_nodes belong to the clamps' ghost nodes."""
         if rep is None:
             rep = self.supernodes()
-        fixed_rep = np.zeros((self.n_nodes, 2), dtype=bool)
+        fixed_rep = np.zeros((self._n_total, 2), dtype=bool)
         for node, comps in self._fixed.items():
             for c in comps:
                 fixed_rep[rep[node], c] = True
+        for k, c in enumerate(self._clamps):
+            if c["hold_position"]:
+                fixed_rep[rep[self.n_nodes + k], :] = True
         return fixed_rep[rep]
 
     def reduced_system(self, extra_fixed=None) -> ReducedSystem:
@@ -333,8 +454,8 @@ class Structure:
         ``extra_fixed``: iterable of (node, component) pairs held or prescribed in addition
         to the supports (the displacement-controlled DOF).
         """
-        n = self.n_nodes
-        if n == 0:
+        n = self._n_total
+        if self.n_nodes == 0:
             raise ValueError("the structure has no rods")
         rep = self.supernodes()
         fixed = self.fixed_components(rep)
@@ -403,20 +524,22 @@ class Structure:
         """Internal force dE/dx (n_nodes, 2), N."""
         sysm = self._unconstrained()
         sysm.evaluate(self._flat(positions))
-        return sysm.grad_full.reshape(-1, 2).copy()
+        return sysm.grad_full[: 2 * self.n_nodes].reshape(-1, 2).copy()
 
     def hessian(self, positions=None) -> np.ndarray:
         """Dense tangent stiffness d2E/dx2 (2 n_nodes, 2 n_nodes), N/m, without constraints."""
         sysm = self._unconstrained()
         dense = sysm.dense_stiffness(self._flat(positions))
         # reduced DOFs are numbered by reverse Cuthill-McKee: map back to natural order
-        perm = sysm.dof_map
+        perm = sysm.dof_map[: 2 * self.n_nodes]
         return dense[np.ix_(perm, perm)]
 
     def _unconstrained(self) -> ReducedSystem:
-        # every node its own DOFs, nothing fixed: used for energy checks only
+        # every real node its own DOFs, nothing fixed: used for energy checks only (the
+        # clamps' ghosts stay held, or moving with their node: they are the clamps)
         saved = (self._merges, self._fixed)
-        self._merges, self._fixed = [], {}
+        held = {self.n_nodes + k: {0, 1} for k, c in enumerate(self._clamps) if c["hold_position"]}
+        self._merges, self._fixed = [], held
         try:
             return self.reduced_system()
         finally:
@@ -424,11 +547,10 @@ class Structure:
 
     def _flat(self, positions):
         if positions is None:
-            return self.reference_positions.reshape(-1).copy()
-        pos = np.asarray(positions, dtype=float)
-        if pos.shape != (self.n_nodes, 2):
-            raise ValueError(f"positions must have shape ({self.n_nodes}, 2); got {pos.shape}")
-        return np.ascontiguousarray(pos.reshape(-1))
+            return self.initial_state()
+        from solver.continuation import state_from
+
+        return state_from(self, positions)
 
     # ------------------------------------------------------------------ experiments
     def push(self, node, direction=(0.0, -1.0), distance=None, method="mgdc", **options):
@@ -454,6 +576,30 @@ class Structure:
         from solver.continuation import equilibrium
 
         return equilibrium(self, positions, node, direction, force, **options)
+
+
+def _tangent_estimate(X, i):
+    """Unit tangent of the polyline X at node i, second order in the edge lengths: the
+    derivative of the parabola through three consecutive nodes (one-sided at an end)."""
+    n = len(X)
+    if n < 3:
+        t = X[min(i + 1, n - 1)] - X[max(i - 1, 0)]
+        return t / np.linalg.norm(t)
+    if i == 0:
+        a, b, c, where = X[0], X[1], X[2], 0
+    elif i == n - 1:
+        a, b, c, where = X[n - 3], X[n - 2], X[n - 1], 2
+    else:
+        a, b, c, where = X[i - 1], X[i], X[i + 1], 1
+    h1 = float(np.linalg.norm(b - a))
+    h2 = float(np.linalg.norm(c - b))
+    s = (0.0, h1, h1 + h2)[where]
+    # derivative of the Lagrange parabola through (0, a), (h1, b), (h1 + h2, c) at s
+    da = (2 * s - h1 - (h1 + h2)) / ((0 - h1) * (0 - h1 - h2))
+    db = (2 * s - 0 - (h1 + h2)) / ((h1 - 0) * (h1 - h1 - h2))
+    dc = (2 * s - 0 - h1) / ((h1 + h2) * h2)
+    t = da * a + db * b + dc * c
+    return t / np.linalg.norm(t)
 
 
 def _turning_curvatures(xz):

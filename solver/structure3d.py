@@ -662,8 +662,12 @@ class Structure3D:
             sysm.pair_params[:, 3:6] = f * natural
             E, g, K = total(q, f, True)
             shift = 0.0
+            du_max = np.inf
             for _ in range(max_iter):
-                if np.max(np.abs(g)) <= tol * fscale:
+                # converged: force residual below tol x force scale, or the last full Newton
+                # step moved nothing by more than 1e-11 x the size (stiff stretching terms
+                # leave a round-off residual)
+                if np.max(np.abs(g)) <= tol * fscale or du_max <= 1e-11 * length:
                     break
                 diag = float(np.max(np.abs(np.diag(K))))
                 while True:
@@ -679,6 +683,7 @@ class Structure3D:
                     shift = max(4.0 * shift, 1e-8 * diag)
                     if shift > 1e12 * diag:
                         raise RuntimeError("relax: no energy decrease along the gradient")
+                du_max = float(np.max(np.abs(du))) if (mu == 0.0 and step == 1.0) else np.inf
                 shift *= 0.25
                 q = q_try
                 sysm.accept(q)

@@ -30,16 +30,25 @@ def run(args: argparse.Namespace) -> int:
     wanted = args.only or FIGURES
     from tqdm import tqdm
 
-    written = []
+    written, failed = [], []
     bar = tqdm(wanted, desc="figures", unit="group", leave=False)
     for name in bar:
         bar.set_postfix_str(name)
         module = importlib.import_module(f"snapmorph.figures_{name}")
-        for path in module.make(str(out), args):
-            tqdm.write(f"wrote {path}")
-            written.append(Path(path))
+        try:
+            for path in module.make(str(out), args):
+                tqdm.write(f"wrote {path}")
+                written.append(Path(path))
+        except ValueError as exc:  # one group's expected failure (e.g. an old map): go on
+            failed.append(f"{name}: {exc}")
     bar.close()
     from snapmorph.figures_gallery import write_gallery
 
     print(f"wrote {write_gallery(out)}")
+    if failed:
+        import sys
+
+        for line in failed:
+            print(f"snapmorph figures: error: {line}", file=sys.stderr)
+        return 1  # the other figures and the gallery are written
     return 0

@@ -278,12 +278,45 @@ def _run_check(args) -> int:
     return 1
 
 
+def _info_other_kind(path, kind) -> int:
+    """`maps info` of a map of a kind other than the planar unit (no DesignMap reader)."""
+    import numpy as np
+    import xarray as xr
+
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        ds = ds.load()
+    print(f"map {path} (kind {kind})")
+    for key in ("title", "schema_version", "grid", "model_options", "package_version", "git_commit",
+                "created", "inputs_sha256"):
+        if key in ds.attrs:
+            print(f"  {key}: {ds.attrs[key]}")
+    status = ds["status"]
+    for dim in status.dims:
+        v = ds[dim].values
+        print(f"  {dim}: {v.min():g} .. {v.max():g} ({v.size} values)")
+    names = dict(zip((int(c) for c in status.attrs.get("flag_values", [])),
+                     str(status.attrs.get("flag_meanings", "")).split()))
+    codes, counts = np.unique(status.values, return_counts=True)
+    print(f"  points: {status.size} (" + ", ".join(f"{names.get(int(c), c)} {n}" for c, n in zip(codes, counts)) + ")")
+    return 0
+
+
 def _run_info(args) -> int:
     import numpy as np
 
     from maps.designmap import DesignMap
     from pipeline.schema import STATUS_CODES
 
+    if args.file:
+        try:
+            import netCDF4
+
+            with netCDF4.Dataset(args.file) as nc:
+                kind = getattr(nc, "kind", "unit")
+        except Exception:
+            kind = "unit"  # DesignMap.load says what is wrong with the file
+        if kind != "unit":
+            return _info_other_kind(args.file, kind)
     dm = DesignMap.load(args.file)
     ds = dm.dataset
     print(f"design map {dm.path}")

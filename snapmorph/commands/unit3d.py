@@ -38,7 +38,7 @@ def add_parser(sub):
     p.add_argument("--actuator-offset", type=number("mm", what="actuator offset along x"),
                    default=0.0, help="actuator position from mid-span along x, mm (default 0)")
     p.add_argument("--nodes", type=integer(21, 2001, what="nodes along a rail"), default=None,
-                   help="resolution: nodes along a rail (default 101)")
+                   help="resolution: nodes along a rail (default 41)")
     p.add_argument("--planar", action="store_true",
                    help="also run the planar model and print both side by side")
     p.add_argument("--plot", metavar="PNG", help="write the states (i)-(iii) in perspective "

@@ -124,7 +124,7 @@ def test_design_svg_with_verification(tmp_path, capsys):
     for name in ("units.csv", "predicted.csv", "simulated.csv", "design.png", "design.txt"):
         assert (out / name).is_file(), name
     x0, y0, a0 = read_placement(out / "units.csv")
-    assert math.hypot(x0, y0 + 0.0) < 0.02  # near the arc's start (0, 0) in y-up mm -> m
+    assert math.hypot(x0, y0 + 0.25) < 0.02  # near the arc's start: SVG (0, 250) is y-up (0, -0.25 m)
     units = read_units_csv(out / "units.csv")
     assert any(not u.is_spacer for u in units)
 

@@ -225,3 +225,23 @@ def test_unreachable_scheduler_fails_fast_with_one_line(tmp_path):
     assert len(lines) == 1 and "cannot connect to the dask scheduler at tcp://127.0.0.1:1 within 5 s" \
         in lines[0], r.stderr
     assert elapsed < 20, elapsed
+
+
+# -- the committed maps are up to date (a fresh clone's `make maps` changes nothing) -----------
+
+@pytest.mark.parametrize("name", ["default", "ci"])
+def test_committed_map_is_up_to_date(name):
+    """`make maps` / `make maps-ci` leave the committed file alone only if its recorded inputs
+    are this tree's: after a change to the solver, units, point.py, schema.py or dataset.py,
+    rebuild them (`make maps maps-ci`) and commit the files."""
+    from pipeline.build import build_identity, read_map_identity
+    from pipeline.fingerprint import differences
+
+    path = REPO / "maps" / "data" / f"{name}.nc"
+    recorded = read_map_identity(path)
+    if recorded is None:
+        pytest.skip(f"{path} records no build inputs (built before fingerprints): run `make maps maps-ci`")
+    _, _, inputs, fp = build_identity(preset(name))
+    assert recorded["fingerprint"] == fp, (
+        f"{path} is stale (differing inputs: {', '.join(differences(recorded['inputs'], inputs))}); "
+        f"run `make maps maps-ci` and commit the maps")

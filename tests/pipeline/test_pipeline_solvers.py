@@ -64,6 +64,10 @@ def test_cli_builds_any_kind_and_is_idempotent(tmp_path, capsys):
     assert main(args + ["--max-failed", "1"]) == 0
     assert "is up to date" in capsys.readouterr().out
     check_map(load(out))
+    assert main(["maps", "info", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "(kind fake2d)" in text and "points: 6 (ok 3, monostable 2, not_converged 1)" in text
+    assert "t_over_L: 0.005 .. 0.01 (2 values)" in text
     assert main(["maps", "build", "--kind", KIND, "--grid", "default", "--out", str(out)]) == 2
     assert "--grid must be one of small for kind fake2d" in capsys.readouterr().err
 

@@ -110,3 +110,67 @@ def test_edge_metrics_of_a_circular_arc():
 def test_bad_input_names_the_parameter(g, kwargs, name):
     with pytest.raises(ValueError, match=name):
         build_unit_mesh_2d(g, **kwargs)
+
+
+# --------------------------------------------------------------------------- with the solver
+def _solver():
+    try:
+        from solver import Structure3D  # noqa: F401
+    except ImportError:  # pragma: no cover
+        pytest.skip("solver.Structure3D is not available")
+
+
+G40 = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
+
+
+@pytest.fixture(scope="module")
+def tall21():
+    _solver()
+    from units.unit2d import simulate_unit_2d
+
+    return simulate_unit_2d(G40, nodes=21)
+
+
+def test_tall_2d_unit_is_bistable_with_four_equal_curled_sides(tall21):
+    r = tall21
+    assert r.status == "ok" and r.bistable and r.exact_states
+    assert 0 < r.d_cr < r.d_unstable < r.d_second
+    sides = r.edges["iii"]
+    thetas = np.array([sides[s]["theta_deg"] for s in SIDES])
+    assert np.all(thetas > 1.0)  # the corners rise: each side curls toward the arches' side
+    assert np.ptp(thetas) < 1e-6 * np.max(thetas)  # the square's symmetry is kept
+    for s in SIDES:
+        m = sides[s]
+        assert m["S"] < G40.L and m["curvature"] > 0 and m["sag"] > 0
+
+
+def test_low_2d_unit_is_monostable():
+    _solver()
+    from units.unit2d import simulate_unit_2d
+
+    r = simulate_unit_2d(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3), nodes=21)
+    assert r.status == "monostable" and not r.bistable and r.F_cr > 0
+    assert "iii" not in r.edges and np.isnan(r.theta_deg)
+
+
+def test_map_point_is_dimensionless_and_never_raises(tall21):
+    from units.unit2d import solve_map_point
+
+    rec = solve_map_point(0.4, 0.005, resolution=21)
+    EI = G40.E * G40.w * G40.t**3 / 12
+    assert rec["status"] == 0
+    assert rec["F_cr"] == pytest.approx(tall21.F_cr * G40.L**2 / EI)
+    assert rec["theta"] == pytest.approx(tall21.theta_deg)
+    assert rec["theta_spread"] < 1e-6
+    bad = solve_map_point(2.0, 0.005, resolution=21)
+    assert bad["status"] == 3 and "h" in bad["message"]
+
+
+def test_cli_unit2d(tmp_path, capsys):
+    _solver()
+    from snapmorph.cli import main
+
+    assert main(["unit2d", "--L", "100", "--h", "40", "--t", "0.5", "--w", "5", "--nodes", "21",
+                 "--json", str(tmp_path / "u.json")]) == 0
+    out = capsys.readouterr().out
+    assert "bistable" in out and "north" in out
