@@ -82,7 +82,8 @@ def main():
     med2, best2, _ = median_time(lambda: specimen_unit(check_self_standing=False))
     print(f"  the same without the self-standing check: median {med2*1e3:.1f} ms (best {best2*1e3:.1f} ms)")
 
-    for extra in ("bench_pipeline", "bench_stability", "bench_units3d", "bench_inverse"):
+    for extra in ("bench_pipeline", "bench_stability", "bench_units3d", "bench_inverse",
+                  "bench_tolerance", "bench_rods3d"):
         path = os.path.join(HERE, extra + ".py")
         if os.path.exists(path):
             print(f"--- {extra}")

@@ -16,6 +16,7 @@ from design.lookup import MapLookup
 from design.target_io import read_target
 from design.targets import Target
 from design.units import Unit, read_units_csv, spacer, write_units_csv
+from design.tolerance import tolerance  # noqa: E402  (the function: design.tolerance(units, ...))
 
 __all__ = [
     "Arc",
@@ -33,6 +34,7 @@ __all__ = [
     "read_target",
     "read_units_csv",
     "spacer",
+    "tolerance",
     "verify_design",
     "write_units_csv",
 ]

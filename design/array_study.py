@@ -7,9 +7,10 @@
 For each state the simulated base (`design.arrays.simulate_array`) is compared with two
 concatenations of single-unit shapes:
 
-- ``fk``: `design.forward_kinematics(..., source="simulate")`, the paper's conjecture as this
-  project uses it — each snapped unit's state (iii) from `simulate_unit`, i.e. with the actuator
-  still on (rigid joint, apex held in x, rollers) at zero force;
+- ``fk``: `design.forward_kinematics(..., source="simulate")` (or ``source="map"``), the
+  paper's conjecture as this project uses it — each snapped unit's state (iii) from
+  `simulate_unit` or the design map, released by default (actuator and rollers removed), or
+  with ``state="actuated"`` the paper's state (iii) with the actuator still on;
 - ``fk_free``: the same concatenation of each unit's *released* state (iii) (one-unit array,
   actuator and rollers removed, same mesh as the array): what the conjecture predicts when the
   units do not interact.
@@ -184,14 +185,14 @@ class ArrayStudy:
         """Markdown: units, states, orders, timings."""
         L = self.length
         lines = [f"### {self.name}: {len(self.units)} units, array length {L * 1e3:.1f} mm", "",
-                 "| unit | L mm | h mm | b mm | side | θ held, simulate_unit (°) "
+                 "| unit | L mm | h mm | b mm | side | θ of the FK unit (°) "
                  "| θ held, array mesh (°) | θ released (°) | F_cr (N) |",
                  "|---|---|---|---|---|---|---|---|---|"]
         for r in self.units_table:
             lines.append(f"| {r['unit']} | {r['L'] * 1e3:.1f} | {r['h'] * 1e3:.1f} | "
                          f"{r['b'] * 1e3:.1f} | {r['side']:+d} | {r['theta_simulate']:.3f} | "
                          f"{r['theta_held']:.3f} | {r['theta_released']:.3f} | {r['F_cr']:.4f} |")
-        lines += ["", "| state | status | vs FK (simulate): curve | tip | end angle (°) | "
+        lines += ["", "| state | status | vs FK: curve | tip | end angle (°) | "
                   "vs released-unit FK: curve | tip | time from flat (s) |",
                   "|---|---|---|---|---|---|---|---|"]
         for r in self.rows:
@@ -227,11 +228,15 @@ class ArrayStudy:
 
 
 def run_study(units, name: str = "array", nodes=None, E: float = PETG_E, orders=None,
-              coincident_ties: bool = True, fk: bool = True) -> ArrayStudy:
+              coincident_ties: bool = True, fk: bool = True, source: str = "simulate",
+              state: str = "released", design_map=None) -> ArrayStudy:
     """Simulate every state of ``units`` and compare with forward kinematics; also the
     all-snapped state in several ``orders`` (tuples of 0-based indices; default `_orders`).
-    ``fk=False`` skips `forward_kinematics(source="simulate")` (NaN deviations)."""
+    ``fk=False`` skips forward kinematics (NaN deviations); ``source``: "simulate" (each unit
+    by `simulate_unit` at the array's resolution) or "map" (``design_map``, default map);
+    ``state``: "released" (default) or "actuated" single units."""
     from design.kinematics import chain
+    from design.lookup import MapLookup
 
     units = list(units)
     t_all = time.perf_counter()
@@ -246,9 +251,11 @@ def run_study(units, name: str = "array", nodes=None, E: float = PETG_E, orders=
     t_single = time.perf_counter() - t0
     t0 = time.perf_counter()
     fk_xy, thetas = {}, {}
+    fk_kw = (dict(source="simulate", nodes=model.nodes, E=E, state=state) if source == "simulate"
+             else dict(source="map", state=state,
+                       lookup=None if design_map is None else MapLookup(design_map)))
     if fk:
-        full = chain(units, [not u.is_spacer for u in units], source="simulate",
-                     nodes=model.nodes, E=E)
+        full = chain(units, [not u.is_spacer for u in units], **fk_kw)
         turns = np.degrees(np.diff(full.angles))
         thetas = {i: abs(float(turns[i])) for i in shapes}
     rows, free_xy = [], {}
@@ -258,7 +265,7 @@ def run_study(units, name: str = "array", nodes=None, E: float = PETG_E, orders=
         nan = float("nan")
         dev_fk = tip_fk = ang = nan
         if fk:
-            ch = chain(units, flags, source="simulate", nodes=model.nodes, E=E)
+            ch = chain(units, flags, **fk_kw)
             fk_xy[key] = ch.xy
             dev_fk = curve_deviation(res.base, ch.xy, length)
             tip_fk = float(np.hypot(*(res.base[-1] - ch.xy[-1]))) / length

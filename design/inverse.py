@@ -1,22 +1,21 @@
-"""Geometric inverse design (paper, Section 4): the units whose snapped array matches a target.
+"""Inverse design: the units whose all-snapped array matches a target.
 
-Steps, as in the paper:
-1. A target given by points (x increasing) is interpolated by a cubic spline y(x); one given by
-   control points with tangents (circular segments, like the paper's S) needs no spline.
-2. Tangents at the control points; biarcs between consecutive control points.
-3. Each arc turning by φ over a chord c becomes units: |φ| below the smallest θ the map reaches
-   while bistable → a straight spacer (consecutive ones merged); |φ| above the largest θ → split
-   into equal arcs; otherwise one unit: h/L from θ = |φ| by inverting the map at t/L, w/L, and
-   L = c / (S/L), iterated to a fixed point since t/L and w/L depend on L. The arch goes on the
-   side the arc turns to (+1 left, -1 right).
-4. Verification: forward kinematics of the all-snapped array, started at the target's first
-   point along its first tangent, against the target: max and RMS distance between the curves
-   as fractions of the target length.
+`inverse_design` has two procedures (design/README.md has the details):
 
-Automatic control points (spline targets): start with the ends and the middle (in arc length),
-as the paper; then, while the deviation is above `tol`, add the midpoint of the interval whose
-bisection lowers the deviation most (the paper added one point by hand where an arc was too flat
-to be a unit). Optional least-squares refinement of every unit's (L, h/L) on the deviation.
+- **Tolerance-driven, any open planar curve** (the default for points): the target is a curve
+  parametrised by arc length (`design.targets.Target`); initial layouts cut it where its
+  turning changes direction and give each run units by an equal share of its turning; then
+  least squares over every unit's (L, h/L), every spacer's L and the placement at once, through
+  the map's interpolants (`_FastModel`, vectorised), until the predicted all-snapped base is
+  within tol × the target's length; fewest units first; otherwise the best design and a
+  warning. Deviations after the best rigid placement and with unit 1 clamped on the target's
+  start and tangent; `verify_design` simulates the designed array as a whole.
+- **The paper's procedure** (Section 4; `controls=`, `tangents=`, `theta_convention="paper"`):
+  spline y(x) or control points with tangents, biarcs, one unit per arc (h/L from θ by
+  inverting the map, L = chord / (S/L) iterated to a fixed point), flat arcs → spacers, large
+  arcs split; optional least-squares refinement of (L, h/L). With the paper's convention the
+  map is entered with theta_end = θ/2, which reproduces the paper's Table 3 and over-curves
+  about twice.
 """
 
 from __future__ import annotations

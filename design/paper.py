@@ -60,7 +60,8 @@ def three_units(design_map=None, source: str = "map") -> dict:
 
 # --- the M ----------------------------------------------------------------------------------------
 def design_M(design_map=None, controls: str = "paper", refine: bool = False, tol: float = 0.01):
-    """Inverse design of the M; controls "paper" (the paper's 4 control points) or "auto"."""
+    """Inverse design of the M; controls "paper" (the paper's procedure with its 4 control
+    points) or "auto" (the tolerance-driven design of `inverse_design`)."""
     dm = design_map if design_map is not None else load_map()
     kw = {"controls": np.array(M_PAPER_CONTROLS_MM) * 1e-3} if controls == "paper" else {}
     return inverse_design(M_POINTS_MM * 1e-3, t=T, w=W, design_map=dm, tol=tol, refine=refine,

@@ -2,9 +2,10 @@
 equally spaced target points through a spline: x = 0, 100, 200, 300, 400 mm, y = 0, 40, 15,
 50, 0 mm (the paper does not list its points; see design/paper.py), t = 0.5 mm, w = 5 mm.
 
-Two designs: with the paper's control points (the ends, the centre, and the one it added
-between the left-most and the centre point: x = 0, 100, 200, 400 mm), and with our automatic
-ones (bisection until the deviation is below 1 %).
+Two designs: the paper's procedure with its control points (the ends, the centre, and the one
+it added between the left-most and the centre point: x = 0, 100, 200, 400 mm), and the
+tolerance-driven design (units, sides and spacers chosen automatically, least squares over all
+of them until the deviation is below 1 % of the target length).
 
     python examples/design_M.py [--map PATH] [--out DIR] [--refine]
 """
@@ -35,8 +36,11 @@ def main(argv=None) -> None:
     dm = load_map(args.map)
     for controls in ("paper", "auto"):
         d = run(dm, controls, args.refine, Path(args.out) / controls)
-        xs = ", ".join(f"{x * 1e3:.0f}" for x in d.control_points[:, 0])
-        print(f"== M, {controls} control points (x = {xs} mm)")
+        if len(d.control_points):
+            xs = ", ".join(f"{x * 1e3:.0f}" for x in d.control_points[:, 0])
+            print(f"== M, the paper's procedure, control points x = {xs} mm")
+        else:
+            print("== M, tolerance-driven design")
         print(d.summary())
         print(compare_M(d, dm))
         print()

@@ -361,8 +361,10 @@ def unit_spec() -> SolverSpec:
         options={"b_over_L": 0.0, "resolution": None, "samples": schema.DEFAULT_SAMPLES},
         presets=dict(PRESETS),
         warm="pipeline.solvers:_unit_warm",
-        # the model and its normalisation; the writer, because it decides the file's bytes
-        sources=("solver", "units", "pipeline.point", "pipeline.schema", "pipeline.dataset"),
+        # the rod solver, the planar unit model (units/ also holds the 2-D and 3-D units, which
+        # do not change this map), the normalisation, and the writer (it decides the bytes)
+        sources=("solver", "units.__init__", "units.geometry", "units.planar", "pipeline.point",
+                 "pipeline.schema", "pipeline.dataset"),
         schema_version=int(schema.SCHEMA_VERSION),
         title="snapmorph design map of the bistable arch-on-base unit",
         call="positional",

@@ -12,7 +12,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("unit", "maps", "design", "fk", "array", "figures", "unit3d", "unit2d")
+COMMANDS = ("unit", "maps", "design", "fk", "array", "figures", "unit3d", "unit2d", "tolerance")
 
 
 class CommandError(Exception):

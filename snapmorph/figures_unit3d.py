@@ -82,7 +82,7 @@ def plot_unit3d_states(r, path, planar=None):
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("z (mm)")
     ax.set_title("side view: 3-D (colour, mean of the rails) and planar (dotted)", fontsize=9)
-    ax.legend(fontsize=7, loc="lower center")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.3), ncol=2)
 
     ax = fig.add_subplot(2, 3, 5)
     d, F = r.curve

@@ -435,17 +435,18 @@ class BranchMonitor:
             return None
         F = ctl.force(sysd)
         # Did the structure stay on a branch through c, or jump to a far one (a branch
-        # through c that turns back in d: the rig snaps)? Back at d_c, Newton from the new
-        # state lands on c itself when the branch passes through it, on the far branch
-        # (as far from c as the new state) after a jump.
+        # through c that turns back in d: the rig snaps)? A quarter of the way back
+        # (d_c itself is singular), Newton from the new state lands a quarter (a branch
+        # through c straight in d) or half (a pitchfork's branch, sqrt in d) of the way
+        # back to c, but stays about as far from c as the new state after a jump.
         gap = float(np.linalg.norm(q - c.q))
         back = q.copy()
-        back[held] = q0[held] + ctl.direction[axis] * c.d
+        back[held] = q0[held] + ctl.direction[axis] * (c.d + 0.25 * delta)
         from solver.continuation import _newton  # (a cycle at import time otherwise)
 
         it = _newton(sysd, back, 0.0, None, self.tol * self.fscale, 1e-11 * self.length,
                      self.max_iter, 0.25 * self.length)
-        jump = it < 0 or float(np.linalg.norm(back - c.q)) > 0.5 * gap
+        jump = it < 0 or float(np.linalg.norm(back - c.q)) > 0.75 * gap
         if jump and not allow_jump:
             return None
         if jump:

@@ -57,28 +57,32 @@ def _eps(i, j, k):
     return 0.5 * (i - j) * (j - k) * (k - i)
 
 
+# the six non-zero Levi-Civita entries (i, j, k, sign)
+_PERMS = np.array([[0, 1, 2, 1], [1, 2, 0, 1], [2, 0, 1, 1],
+                   [0, 2, 1, -1], [2, 1, 0, -1], [1, 0, 2, -1]], dtype=np.int64)
+
+
 @njit(cache=True)
 def _triple(z, p, q, r, coef, grad, hess):
     """Add coef * p . (q x r) (p, q, r: offsets of 3-vectors in z) to grad and hess; returns
     its value."""
     val = 0.0
-    for i in range(3):
-        for j in range(3):
-            for k in range(3):
-                e = _eps(i, j, k)
-                if e == 0.0:
-                    continue
-                ce = coef * e
-                val += e * z[p + i] * z[q + j] * z[r + k]
-                grad[p + i] += ce * z[q + j] * z[r + k]
-                grad[q + j] += ce * z[p + i] * z[r + k]
-                grad[r + k] += ce * z[p + i] * z[q + j]
-                hess[p + i, q + j] += ce * z[r + k]
-                hess[q + j, p + i] += ce * z[r + k]
-                hess[p + i, r + k] += ce * z[q + j]
-                hess[r + k, p + i] += ce * z[q + j]
-                hess[q + j, r + k] += ce * z[p + i]
-                hess[r + k, q + j] += ce * z[p + i]
+    for n in range(6):
+        i = p + _PERMS[n, 0]
+        j = q + _PERMS[n, 1]
+        k = r + _PERMS[n, 2]
+        e = float(_PERMS[n, 3])
+        ce = coef * e
+        val += e * z[i] * z[j] * z[k]
+        grad[i] += ce * z[j] * z[k]
+        grad[j] += ce * z[i] * z[k]
+        grad[k] += ce * z[i] * z[j]
+        hess[i, j] += ce * z[k]
+        hess[j, i] += ce * z[k]
+        hess[i, k] += ce * z[j]
+        hess[k, i] += ce * z[j]
+        hess[j, k] += ce * z[i]
+        hess[k, j] += ce * z[i]
     return coef * val
 
 
@@ -111,41 +115,108 @@ def _quotient(num, gn, hn, den, gd, hd, grad, hess):
     return f
 
 
+# z offsets of t_a, t_b and the two directors summed into u, per curvature (kappa1: m2,
+# kappa2: m1 with a minus sign)
+_CURV_U = np.array([[6, 15], [3, 12]], dtype=np.int64)
+
+
+@njit(cache=True)
+def _curvature9(y, g9, h9):
+    """f = u . (t_a x t_b) / (1 + t_a . t_b) of y = [t_a, t_b, u] (9,); writes its
+    gradient (9,) and Hessian (9, 9)."""
+    gn = np.zeros(9)
+    hn = np.zeros((9, 9))
+    num = _triple(y, 6, 0, 3, 1.0, gn, hn)
+    gd = np.zeros(9)
+    hd = np.zeros((9, 9))
+    den = 1.0 + _dot(y, 0, 3, gd, hd)
+    return _quotient(num, gn, hn, den, gd, hd, g9, h9)
+
+
 @njit(cache=True)
 def material_curvature(z, which, grad, hess):
     """kappa1 (``which`` = 1) or kappa2 (2) of the frame pair ``z`` (18,); writes its gradient
     (18,) and Hessian (18, 18) w.r.t. z."""
-    gn = np.zeros(18)
-    hn = np.zeros((18, 18))
-    gd = np.zeros(18)
-    hd = np.zeros((18, 18))
-    # kappa1 = (m2_a + m2_b) . (t_a x t_b) / D, kappa2 = -(m1_a + m1_b) . (t_a x t_b) / D
-    if which == 1:
-        num = _triple(z, 6, 0, 9, 1.0, gn, hn) + _triple(z, 15, 0, 9, 1.0, gn, hn)
-    else:
-        num = _triple(z, 3, 0, 9, -1.0, gn, hn) + _triple(z, 12, 0, 9, -1.0, gn, hn)
-    den = 1.0 + _dot(z, 0, 9, gd, hd)
-    return _quotient(num, gn, hn, den, gd, hd, grad, hess)
+    y = np.empty(9)
+    g9 = np.empty(9)
+    h9 = np.empty((9, 9))
+    zi = np.empty(9, dtype=np.int64)  # z index of each y component (u: the first director)
+    ua = _CURV_U[which - 1, 0]
+    ub = _CURV_U[which - 1, 1]
+    sgn = 1.0 if which == 1 else -1.0
+    for k in range(3):
+        y[k] = z[k]
+        y[3 + k] = z[9 + k]
+        y[6 + k] = sgn * (z[ua + k] + z[ub + k])
+    kappa = _curvature9(y, g9, h9)
+    grad[:] = 0.0
+    hess[:, :] = 0.0
+    # z index and sign of each y component; u appears twice (both directors)
+    for k in range(3):
+        zi[k] = k
+        zi[3 + k] = 9 + k
+    for a in range(6):
+        grad[zi[a]] = g9[a]
+        for b in range(6):
+            hess[zi[a], zi[b]] = h9[a, b]
+    for k in range(3):
+        for base in (ua, ub):
+            grad[base + k] = sgn * g9[6 + k]
+            for b in range(6):
+                hess[base + k, zi[b]] = sgn * h9[6 + k, b]
+                hess[zi[b], base + k] = sgn * h9[b, 6 + k]
+            for m in range(3):
+                for base2 in (ua, ub):
+                    hess[base + k, base2 + m] = h9[6 + k, 6 + m]
+    return kappa
 
 
 @njit(cache=True)
 def bending_terms(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess):
     """Bending energy (J) of a frame pair ``z`` (18,) with stiffnesses k1, k2 = EI / l_bar
-    (N m) and natural integrated curvatures; writes grad (18,) and hess (18, 18)."""
-    g = np.empty(18)
-    h = np.empty((18, 18))
+    (N m) and natural integrated curvatures; writes grad (18,) and hess (18, 18).
+
+    Each curvature depends on 9 numbers (t_a, t_b and the sum of two directors): its
+    derivatives are taken in those and scattered to the 12 components of z it reads."""
     grad[:] = 0.0
     hess[:, :] = 0.0
+    y = np.empty(9)
+    g9 = np.empty(9)
+    h9 = np.empty((9, 9))
+    zi = np.empty(12, dtype=np.int64)
+    yi = np.empty(12, dtype=np.int64)
+    sg = np.empty(12)
     energy = 0.0
     for which in range(1, 3):
-        kappa = material_curvature(z, which, g, h)
-        k = k1 if which == 1 else k2
+        ua = _CURV_U[which - 1, 0]
+        ub = _CURV_U[which - 1, 1]
+        sgn = 1.0 if which == 1 else -1.0
+        for k in range(3):
+            y[k] = z[k]
+            y[3 + k] = z[9 + k]
+            y[6 + k] = sgn * (z[ua + k] + z[ub + k])
+            zi[k] = k
+            zi[3 + k] = 9 + k
+            zi[6 + k] = ua + k
+            zi[9 + k] = ub + k
+            yi[k] = k
+            yi[3 + k] = 3 + k
+            yi[6 + k] = 6 + k
+            yi[9 + k] = 6 + k
+            sg[k] = 1.0
+            sg[3 + k] = 1.0
+            sg[6 + k] = sgn
+            sg[9 + k] = sgn
+        kappa = _curvature9(y, g9, h9)
+        kk = k1 if which == 1 else k2
         dk = kappa - (kappa1_bar if which == 1 else kappa2_bar)
-        energy += 0.5 * k * dk * dk
-        for i in range(18):
-            grad[i] += k * dk * g[i]
-            for j in range(18):
-                hess[i, j] += k * (g[i] * g[j] + dk * h[i, j])
+        energy += 0.5 * kk * dk * dk
+        for a in range(12):
+            ga = sg[a] * g9[yi[a]]
+            grad[zi[a]] += kk * dk * ga
+            for b in range(12):
+                gb = sg[b] * g9[yi[b]]
+                hess[zi[a], zi[b]] += kk * (ga * gb + dk * sg[a] * sg[b] * h9[yi[a], yi[b]])
     return energy
 
 

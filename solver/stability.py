@@ -134,7 +134,8 @@ def critical_modes(band, count, around, P=None):
                                    check_finite=False)
     score = np.abs(w) / max(np.max(np.abs(w)), 1e-300)
     if P is not None:
-        p = P / np.linalg.norm(P)
+        p = P / np.max(np.abs(P))  # no overflow for a scaled load
+        p = p / np.linalg.norm(p)
         score = score + np.abs(p @ v)  # a load-moving mode only wins when nothing else fits
     pick = np.sort(np.argsort(score)[:count])
     w, v = w[pick], v[:, pick]

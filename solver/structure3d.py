@@ -608,19 +608,19 @@ class Structure3D:
 
     def relax(self, q=None, moments=(), ramp=1, tol=1e-10, max_iter=100):
         """Minimise the energy from the state ``q`` (default: stress free) by damped Newton
-        (a Levenberg–Marquardt shift where K is not positive definite; every step must lower
-        the energy), optionally under dead couples ``moments`` = [(node_a, node_b, M (N m),
-        axis (3,))], each on the edge from node_a to node_b, which must turn in the plane
-        normal to the axis. ``ramp``: the couples and the natural curvatures and twists are
-        raised to their values in this many equal stages (a homotopy from a nearby state).
-        The reference frames are carried along after every step. Returns (q, info).
-        Small problems only (dense linear algebra)."""
+        (banded Newton where K is positive definite, else a dense Levenberg–Marquardt shift;
+        every step must lower the energy), optionally under dead couples ``moments`` =
+        [(node_a, node_b, M (N m), axis (3,))], each on the edge from node_a to node_b, which
+        must turn in the plane normal to the axis. ``ramp``: the couples and the natural
+        curvatures and twists are raised to their values in this many equal stages (a
+        homotopy through equilibria). The reference frames are carried along after every
+        step. Returns (q, info dict)."""
         from solver.banded import band_to_dense
 
         q = self.initial_state() if q is None else self.state(self.positions_of(q),
                                                               self.twist_of(q))
-        ramp = int(ramp)
-        if ramp < 1:
+        if isinstance(ramp, (bool, np.bool_)) or not isinstance(ramp, (int, np.integer)) \
+                or ramp < 1:
             raise ValueError(f"ramp must be an integer >= 1; got {ramp!r}")
         sysm = self.reduced_system()
         length, fscale = self.scales()
@@ -633,12 +633,12 @@ class Structure3D:
             ax = _finite_array(axis, "moment axis", "a direction")
             if ax.shape != (3,) or not np.linalg.norm(ax) > 0:
                 raise ValueError(f"moment axis must be a non-zero 3-vector; got {axis!r}")
-            loads.append((a, b, float(_finite_array(M, "moment M", "N m")), ax / np.linalg.norm(ax)))
+            M = float(_finite_array(M, "moment M", "N m"))
+            loads.append((a, b, M, ax / np.linalg.norm(ax)))
 
-        def total(qv, f, with_derivatives):
+        def evaluate(qv, f):
+            """Energy; leaves the load-including gradient in sysm.grad and K in sysm.band."""
             E = sysm.evaluate(qv)
-            g = sysm.grad.copy()
-            K = band_to_dense(sysm.band) if with_derivatives else None
             X = self.positions_of(qv)
             for a, b, M, ax in loads:
                 ge = np.empty(3)
@@ -649,18 +649,20 @@ class Structure3D:
                 for i, (s_i, r_i) in enumerate(dofs):
                     if r_i < 0:
                         continue
-                    g[r_i] += s_i * ge[i % 3]
-                    if with_derivatives:
-                        for j, (s_j, r_j) in enumerate(dofs):
-                            if r_j >= 0:
-                                K[r_i, r_j] += s_i * s_j * he[i % 3, j % 3]
-            return E, g, K
+                    sysm.grad[r_i] += s_i * ge[i % 3]
+                    for j, (s_j, r_j) in enumerate(dofs):
+                        if 0 <= r_j <= r_i:
+                            sysm.band[r_i - r_j, r_j] += s_i * s_j * he[i % 3, j % 3]
+            return E
 
         total_it = 0
+        E = 0.0
+        g = np.zeros(sysm.n)
         for stage in range(1, ramp + 1):
             f = stage / ramp
             sysm.pair_params[:, 3:6] = f * natural
-            E, g, K = total(q, f, True)
+            E = evaluate(q, f)
+            g = sysm.grad[: sysm.n].copy()
             shift = 0.0
             du_max = np.inf
             for _ in range(max_iter):
@@ -669,25 +671,38 @@ class Structure3D:
                 # leave a round-off residual)
                 if np.max(np.abs(g)) <= tol * fscale or du_max <= 1e-11 * length:
                     break
-                diag = float(np.max(np.abs(np.diag(K))))
+                K = None
+                mu = 0.0
+                if shift == 0.0 and sysm.factor() and sysm.negative_eigenvalues == 0:
+                    du = sysm.solve(-g)
+                else:
+                    evaluate(q, f)
+                    K = band_to_dense(sysm.band)
                 while True:
-                    eig_min = float(np.linalg.eigvalsh(K)[0])
-                    mu = max(shift, -1.01 * eig_min + 1e-9 * diag if eig_min <= 0 else 0.0)
-                    du = np.linalg.solve(K + mu * np.eye(K.shape[0]), -g)
+                    if K is not None:
+                        eig_min = float(np.linalg.eigvalsh(K)[0])
+                        diag = float(np.max(np.abs(np.diag(K))))
+                        mu = max(shift, -1.01 * eig_min + 1e-9 * diag if eig_min <= 0 else 0.0)
+                        du = np.linalg.solve(K + mu * np.eye(K.shape[0]), -g)
                     step = min(1.0, 0.1 * length / max(float(np.max(np.abs(du))), 1e-300))
                     q_try = q.copy()
                     sysm.increment(q_try, du, step)
-                    E_try = total(q_try, f, False)[0]
+                    E_try = evaluate(q_try, f)
                     if E_try <= E + 1e-12 * abs(E):
                         break
+                    if K is None:
+                        evaluate(q, f)
+                        K = band_to_dense(sysm.band)
+                        diag = float(np.max(np.abs(np.diag(K))))
                     shift = max(4.0 * shift, 1e-8 * diag)
                     if shift > 1e12 * diag:
                         raise RuntimeError("relax: no energy decrease along the gradient")
                 du_max = float(np.max(np.abs(du))) if (mu == 0.0 and step == 1.0) else np.inf
-                shift *= 0.25
+                shift = 0.25 * shift if shift > 1e-6 else 0.0
                 q = q_try
                 sysm.accept(q)
-                E, g, K = total(q, f, True)
+                E = evaluate(q, f)
+                g = sysm.grad[: sysm.n].copy()
                 total_it += 1
             else:
                 raise RuntimeError(f"relax did not converge in {max_iter} iterations at stage "

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 try:  # the unit engineer moves UnitGeometry to units/; keep working before and after
-    from units.geometry import UnitGeometry
+    from units.geometry import UnitGeometry  # noqa: F401 - re-exported
 except ImportError:  # pragma: no cover - older tree
     from solver.unit_model import UnitGeometry
 

@@ -90,7 +90,8 @@ def geometry_problem(L, h, t, w, b, E, joint_length=JOINT_LENGTH_DEFAULT, bond_l
         return (f"b + w must be < L/2 (the sinusoid needs a span); got b + w = {q(b + w)} "
                 f"with L/2 = {q(0.5 * L)}")
     span = L - 2.0 * (b + w)
-    if span < MIN_SPAN_FRACTION * L:
+    edge = 1.0 - 1e-12  # the edges themselves belong to the domain, whatever the rounding
+    if span < MIN_SPAN_FRACTION * L * edge:
         return (f"b + w must be <= {0.5 * (1 - MIN_SPAN_FRACTION):g} L = "
                 f"{q(0.5 * (1 - MIN_SPAN_FRACTION) * L)} (valid domain: the sinusoid's span "
                 f"L - 2(b + w) >= {MIN_SPAN_FRACTION:g} L); got b + w = {q(b + w)}")
@@ -100,10 +101,10 @@ def geometry_problem(L, h, t, w, b, E, joint_length=JOINT_LENGTH_DEFAULT, bond_l
     if t > 0.05 * L:
         return f"t must be <= 0.05 L = {q(0.05 * L)} for a rod model; got {q(t)}"
     for name, value, low in (("t", t, MIN_SECTION_FRACTION), ("w", w, MIN_WIDTH_FRACTION)):
-        if value < low * L:
+        if value < low * L * edge:
             return (f"{name} ({_MEANING[name]}, {unit}) must be >= {low:g} L = "
                     f"{q(low * L)} (valid domain of the model); got {q(value)}")
-    if b + w < MIN_FLAT_FRACTION * L:
+    if b + w < MIN_FLAT_FRACTION * L * edge:
         return (f"b + w (the flat, bonded end length) must be >= {MIN_FLAT_FRACTION:g} L = "
                 f"{q(MIN_FLAT_FRACTION * L)} (valid domain of the model); got {q(b + w)}")
     if bond_length is not None and not (0.0 < bond_length <= b + w):

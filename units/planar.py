@@ -438,6 +438,8 @@ def _zero_crossings(d, F, start=0):
     flips the sign: it is the slope that classifies a crossing, not the direction of F."""
     out = []
     for i in range(max(start, 0) + 1, len(F)):
+        if i == 1 and F[0] == 0.0:
+            continue  # the unloaded start is not a crossing
         if (F[i - 1] >= 0.0 > F[i]) or (F[i - 1] <= 0.0 < F[i]):
             dF = F[i] - F[i - 1]
             dd = d[i] - d[i - 1]

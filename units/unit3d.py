@@ -75,7 +75,8 @@ def _check_imperfections(tilt_deg, apex_offset, actuator_offset, g):
         try:
             v = float(value)
         except (TypeError, ValueError):
-            raise ValueError(f"{name} ({meaning}, {unit}) must be a number; got {value!r}") from None
+            raise ValueError(
+                f"{name} ({meaning}, {unit}) must be a number; got {value!r}") from None
         if isinstance(value, bool) or not math.isfinite(v):
             raise ValueError(f"{name} ({meaning}, {unit}) must be a finite number; got {value!r}")
         return v
@@ -251,7 +252,8 @@ def build_unit_mesh_3d(
     # joint adds a bending/twisting pair; at the rods' common end a tie, see Mesh3D.bond),
     # bond="tie" only next to the two ends of the bond
     glued = g.bond if hasattr(g, "bond") else x0
-    n_bond = n_end if glued >= x0 * (1 - 1e-12) else int(np.count_nonzero(end_x <= glued + 1e-12 * L))
+    n_bond = (n_end if glued >= x0 * (1 - 1e-12)
+              else int(np.count_nonzero(end_x <= glued + 1e-12 * L)))
     # Orientations are coupled only at nodes whose both neighbouring edges are bonded (a
     # joint at the last bonded node would also tie the arch's first free edge to the base).
     for k in range(n_bond):
@@ -285,8 +287,9 @@ def build_unit_mesh_3d(
     if supports:
         for n in support_nodes:
             mesh.fixes.append((n, "z"))
-    mesh.named.update(push=push, h=g.h, base_mid_left=int(rail_l[np.argmin(np.abs(base_x - 0.5 * L))]),
-                      base_mid_right=int(rail_r[np.argmin(np.abs(base_x - 0.5 * L))]))
+    mid = int(np.argmin(np.abs(base_x - 0.5 * L)))
+    mesh.named.update(push=push, h=g.h, base_mid_left=int(rail_l[mid]),
+                      base_mid_right=int(rail_r[mid]))
     mesh.groups.update(rail_left=rail_l, rail_right=rail_r, arch=arch, centre_left=c_left,
                        centre_right=c_right, supports=np.array(support_nodes, dtype=np.int64),
                        actuator=arch[offset + lo: offset + hi].copy(), actuator_head=head)

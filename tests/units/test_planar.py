@@ -118,9 +118,16 @@ def test_released_state_and_theta_end(paper):
 
 
 # ------------------------------------------------------------------ bistable means stable
-#: large-b geometries whose first positive-slope zero crossing is an unstable state
-LARGE_B = [dict(L=0.1, b=0.0262, w=0.0023, h=0.486 * 0.043, t=0.31e-3),
-           dict(L=0.1, b=0.0197, w=0.0050, h=0.682 * 0.0506, t=0.71e-3)]
+#: large-b geometries (random ones of the valid domain) whose first positive-slope zero
+#: crossing is a state (iii) with 2 negative eigenvalues: reported "ok" and bistable before
+LARGE_B = [
+    {'L': 0.1, 'h': 0.020913263618982013, 't': 0.0003123495791498756,
+     'w': 0.0023167430133136232, 'b': 0.026183881200787133},
+    {'L': 0.1, 'h': 0.02373465009450191, 't': 0.001003030207702178,
+     'w': 0.00871905216825127, 'b': 0.01911330368500156},
+    {'L': 0.1, 'h': 0.03075134707065725, 't': 0.00027449067749336323,
+     'w': 0.00915772689756939, 'b': 0.015637364845520918},
+]
 
 
 @pytest.mark.parametrize("kw", LARGE_B)
@@ -152,7 +159,7 @@ def test_zero_crossings_are_classified_by_slope_not_direction():
 def test_monostable_units_say_why():
     r = simulate_unit(UnitGeometry(L=0.1, h=0.0, t=0.5e-3, w=5e-3))
     assert r.status == "monostable" and r.reason
-    r = simulate_unit(UnitGeometry(L=0.1, h=0.004, t=0.5e-3, w=5e-3))
+    r = simulate_unit(UnitGeometry(L=0.1, h=0.001, t=0.5e-3, w=5e-3))
     assert r.status == "monostable" and "no snap-through" in r.reason
 
 
@@ -202,6 +209,8 @@ BAD_VALUES = [("abc", "a real number"), (None, "a real number"), (1 + 2j, "not c
                                        ("E", "Pa"), ("joint_length", "m"), ("bond_length", "m")])
 @pytest.mark.parametrize("value,match", BAD_VALUES)
 def test_bad_geometry_values_name_the_parameter_and_unit(name, unit, value, match):
+    if name == "bond_length" and value is None:
+        return  # None is bond_length's default: the whole flat part
     with pytest.raises(ValueError, match=rf"^{name} \(.*, {unit}\) must be .*{match}"):
         UnitGeometry(**{**PAPER, name: value})
 
@@ -210,7 +219,7 @@ def test_bad_geometry_values_name_the_parameter_and_unit(name, unit, value, matc
     (dict(bond_length=0.0), r"bond_length \(glued length at each end, m\) must be > 0 and <= b \+ w"),
     (dict(bond_length=0.011), r"<= b \+ w = 0.01 m"),
     (dict(joint_length=-1e-3), r"joint_length .* must be >= 0"),
-    (dict(joint_length=0.04), r"joint_length .* must be <= half the arch's arc length"),
+    (dict(joint_length=0.05), r"joint_length .* must be <= half the arch's arc length"),
     (dict(t=1e-8), r"t \(sheet thickness, m\) must be >= 1e-05 L = 1e-06 m \(valid domain"),
     (dict(w=1e-9, b=5e-3), r"w \(strip width, m\) must be >= 1e-06 L"),
     (dict(w=1e-6, b=0.0), r"b \+ w \(the flat, bonded end length\) must be >= 0.0001 L"),

@@ -43,8 +43,10 @@ def test_square_frame_of_four_strips_jointed_at_the_corners(unit):
 def test_arches_join_opposite_midpoints_and_cross_bonded_at_the_apex(unit):
     X = unit.mesh.positions
     ax, ay = unit.arches["x"], unit.arches["y"]
-    assert X[ax[0]] == pytest.approx([0, 0.5 * G.L, 0]) and X[ax[-1]] == pytest.approx([G.L, 0.5 * G.L, 0])
-    assert X[ay[0]] == pytest.approx([0.5 * G.L, 0, 0]) and X[ay[-1]] == pytest.approx([0.5 * G.L, G.L, 0])
+    assert X[ax[0]] == pytest.approx([0, 0.5 * G.L, 0])
+    assert X[ax[-1]] == pytest.approx([G.L, 0.5 * G.L, 0])
+    assert X[ay[0]] == pytest.approx([0.5 * G.L, 0, 0])
+    assert X[ay[-1]] == pytest.approx([0.5 * G.L, G.L, 0])
     assert np.max(X[ax, 2]) == pytest.approx(G.h) and np.max(X[ay, 2]) == pytest.approx(G.h)
     apex_x = int(ax[np.argmax(X[ax, 2])])
     apex_y = int(ay[np.argmax(X[ay, 2])])
@@ -57,7 +59,8 @@ def test_arches_join_opposite_midpoints_and_cross_bonded_at_the_apex(unit):
     span = G.L - 2 * x0
     u = X[ax, 0]
     inside = (u > x0) & (u < G.L - x0)
-    assert np.allclose(X[ax, 2][inside], 0.5 * G.h * (1 - np.cos(2 * np.pi * (u[inside] - x0) / span)))
+    expected = 0.5 * G.h * (1 - np.cos(2 * np.pi * (u[inside] - x0) / span))
+    assert np.allclose(X[ax, 2][inside], expected)
     assert np.all(X[ax, 2][~inside] == 0.0)
     # feet rigidly jointed to the side midpoints, which carry the supports
     feet = {int(ax[0]), int(ax[-1]), int(ay[0]), int(ay[-1])}

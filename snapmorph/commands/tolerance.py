@@ -1,0 +1,131 @@
+"""`snapmorph tolerance`: fabrication tolerance of an array, Monte Carlo through the design map."""
+
+from __future__ import annotations
+
+import argparse
+
+from snapmorph.commands._common import integer, number
+
+HELP = """Propagate fabrication errors of hand-made units (normal errors in L, h, t and w,
+standard deviations in millimetres) through the design map: the envelope of the all-snapped
+shape, the scatter of the free end (mm and degrees) and each unit's probability of staying
+bistable. Units come from a units.csv (as `snapmorph design` writes it)."""
+
+EPILOG = """Frame: the envelope is drawn with unit 1 starting at (0, 0) heading +x; --target
+(x_mm, y_mm CSV, the design's target) is moved into that frame with the units.csv placement
+line when there is one. --simulate K also simulates K randomly perturbed whole arrays
+(design.arrays) and counts how many lie inside the envelope (slow: seconds per array)."""
+
+
+def add_parser(sub):
+    p = sub.add_parser("tolerance", help="fabrication tolerance of an array (Monte Carlo)",
+                       description=HELP, epilog=EPILOG)
+    p.add_argument("units", help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
+    p.add_argument("--sigma-h", type=number("mm", 0, 10, low_inclusive=True,
+                                            what="standard deviation of h"), default=0.5,
+                   help="standard deviation of the arch height h, mm (default 0.5)")
+    p.add_argument("--sigma-L", type=number("mm", 0, 10, low_inclusive=True,
+                                            what="standard deviation of L"), default=0.3,
+                   help="standard deviation of the base length L, mm (default 0.3)")
+    p.add_argument("--sigma-t", type=number("mm", 0, 10, low_inclusive=True,
+                                            what="standard deviation of t"), default=0.02,
+                   help="standard deviation of the thickness t, mm (default 0.02)")
+    p.add_argument("--sigma-w", type=number("mm", 0, 10, low_inclusive=True,
+                                            what="standard deviation of w"), default=0.0,
+                   help="standard deviation of the strip width w, mm (default 0)")
+    p.add_argument("--n", type=integer(10, 1000000, what="samples"), default=1000,
+                   help="number of Monte Carlo samples (default 1000)")
+    p.add_argument("--seed", type=integer(0, None, what="random seed"), default=0,
+                   help="random seed (default 0; the same seed gives the same result)")
+    p.add_argument("--state", choices=("released", "actuated"), default="released",
+                   help="units released from their actuators (default) or still actuated")
+    p.add_argument("--map", metavar="FILE", help="design map (default maps/data/default.nc)")
+    p.add_argument("--target", metavar="CSV", help="target curve (x_mm, y_mm) to draw under the envelope")
+    p.add_argument("--simulate", type=integer(0, 1000, what="whole-array simulations"), default=0,
+                   help="also simulate this many perturbed whole arrays and check them against "
+                   "the envelope (default 0)")
+    p.add_argument("--plot", metavar="PNG", help="write the envelope over the target")
+    p.add_argument("--json", metavar="FILE", help="write the summary as JSON")
+    p.set_defaults(run=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    import json
+    import math
+
+    import numpy as np
+
+    from snapmorph.cli import CommandError
+    from snapmorph.commands._common import input_file, output_file, plot_file
+
+    units_path = input_file(args.units, "units")
+    if args.map:
+        input_file(args.map, "--map")
+    if args.target:
+        input_file(args.target, "--target")
+    plot_path = plot_file(args.plot, "--plot") if args.plot else None
+    json_path = output_file(args.json, "--json") if args.json else None
+
+    from design.lookup import load_map
+    from design.tolerance import plot_tolerance, tolerance
+    from design.units import read_placement, read_units_csv
+
+    dm = load_map(args.map)
+    b_over_L = float(dm.attrs.get("b_over_L", 0.0))
+    units = read_units_csv(units_path, b_over_L=b_over_L)
+    sigma = {"L": args.sigma_L * 1e-3, "h": args.sigma_h * 1e-3, "t": args.sigma_t * 1e-3}
+    if args.sigma_w:
+        sigma["w"] = args.sigma_w * 1e-3
+    try:
+        r = tolerance(units, sigma=sigma, n=args.n, seed=args.seed, design_map=dm, state=args.state)
+    except ValueError as exc:
+        raise CommandError(str(exc)) from None
+    print(f"{units_path}: {len(units)} units")
+    print(r.summary())
+    simulated, contained = [], None
+    if args.simulate:
+        simulated, contained = simulate_perturbed(units, sigma, args.simulate, args.seed + 1, r)
+        print(f"whole-array simulations: {sum(contained)} of {len(contained)} inside the envelope "
+              f"({100.0 * sum(contained) / max(len(contained), 1):.0f} %)")
+    target = None
+    if args.target:
+        from design.targets import read_target_csv
+
+        target, _ = read_target_csv(args.target)
+        placement = read_placement(units_path)
+        if placement is not None:  # target frame -> array frame (unit 1 at (0, 0), +x)
+            x0, y0, a = placement
+            c, s = math.cos(-a), math.sin(-a)
+            target = (np.asarray(target) - [x0, y0]) @ np.array([[c, s], [-s, c]])
+    if plot_path:
+        plot_tolerance(r, plot_path, target=target, simulated=simulated)
+        print(f"wrote {plot_path}")
+    if json_path:
+        payload = {"n": r.n, "n_ok": r.n_ok, "outside_map": r.outside_map, "state": r.state,
+                   "sigma_mm": {k: v * 1e3 for k, v in r.sigma.items()},
+                   "free_end": r.free_end_summary(), "p_bistable": r.p_bistable.tolist(),
+                   "held_out_coverage": r.held_out_coverage, "time_s": r.time_s}
+        if contained is not None:
+            payload["simulated_inside"] = [bool(c) for c in contained]
+        with open(json_path, "w") as fh:
+            json.dump(payload, fh, indent=1)
+        print(f"wrote {json_path}")
+    return 0
+
+
+def simulate_perturbed(units, sigma, k, seed, result):
+    """Simulate ``k`` whole arrays (all snapped) with independently perturbed units: (list of
+    (K, 2) bases, list of bool inside the envelope). Arrays that fail are skipped."""
+    from design.tolerance import perturbed_units
+    from design.arrays import simulate_array
+
+    curves, inside = [], []
+    for us in perturbed_units(units, sigma, k, seed):
+        r = simulate_array(us, [not u.is_spacer for u in us])
+        if r.status != "ok":
+            print(f"  a perturbed array failed: {r.status}")
+            continue
+        curves.append(r.base)
+        inside.append(result.envelope_contains(r.base))
+    return curves, inside

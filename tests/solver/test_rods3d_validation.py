@@ -1,0 +1,161 @@
+"""3-D rods against the planar solver and against closed forms.
+
+- Planar parity: the planar benchmarks built from 3-D strips lying in a plane (the strip's
+  face normal in that plane, so that in-plane bending is the easy way, EI1) reproduce the
+  planar `solver.Structure` paths. The 3-D discretisation reduces exactly to the planar one
+  for in-plane motion, so the agreement is that of the solver tolerance, far inside 0.1 %.
+- Lateral–torsional buckling of a cantilever strip loaded at the tip in its stiff direction:
+  P_cr L^2 / sqrt(EI1 GJ) = 4.013 (Prandtl, Michell) for EI2 -> infinity; with the strip's
+  finite EI2 the classical correction divides it by sqrt((1 - EI1/EI2)(1 - GJ/EI2)).
+"""
+
+import numpy as np
+import pytest
+
+from solver import Structure, Structure3D, reference_models
+from tests.solver.models import clamped_rod_nodes
+
+E, NU = 2.2e9, 0.38
+
+
+def _rotation(rng):
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    return Q if np.linalg.det(Q) > 0 else -Q
+
+
+def _compare(p3, p2, points):
+    """Max relative difference of the force at the given displacements."""
+    F3 = np.interp(points, p3.displacement, p3.force)
+    F2 = np.interp(points, p2.displacement, p2.force)
+    return float(np.max(np.abs(F3 - F2) / np.max(np.abs(F2))))
+
+
+def _planar_to_3d(xz, normal_in_plane=True):
+    return np.stack([xz[:, 0], np.zeros(len(xz)), xz[:, 1]], 1)
+
+
+def test_elastica_cantilever_parity_in_any_orientation(rng):
+    """The planar elastica benchmark (tests/solver/test_elastica.py), and the same strip
+    rotated arbitrarily in space with its load: same force-deflection path."""
+    L, T, W = 1.0, 5e-4, 1e-2
+    Em = 12.0 / (W * T**3)
+    n = 41
+    s = clamped_rod_nodes(n, L)
+    xz = np.stack([s, 0 * s], 1)
+    planar = Structure()
+    planar.add_rod(xz, width=W, thickness=T, E=Em)
+    planar.fix(0, "xz")
+    planar.fix(1, "xz")
+    p2 = planar.push(n - 1, (0.0, -1.0), 0.8 * L, method="mgdc")
+    for R in (np.eye(3), _rotation(rng)):
+        st = Structure3D()
+        rod = st.add_rod(_planar_to_3d(xz) @ R.T, width=W, thickness=T, E=Em, nu=NU,
+                         normal=R @ [0.0, 0.0, 1.0])
+        # the planar model's held first edge: node 1 fixed, node 0 clamped along the edge
+        st.clamp(rod.nodes[0], toward=rod.nodes[1])
+        st.fix(rod.nodes[1], "xyz")
+        p3 = st.push(rod.nodes[-1], direction=R @ [0.0, 0.0, -1.0], distance=0.8 * L,
+                     method="mgdc")
+        assert p3.status == "ok" and p2.status == "ok"
+        assert _compare(p3, p2, np.linspace(0.05, 0.79, 30) * L) < 1e-6
+        # stays in its plane, untwisted
+        out_of_plane = (p3.positions[-1] @ R)[:, 1]
+        assert np.max(np.abs(out_of_plane)) < 1e-9 * L
+        assert np.max(np.abs(p3.twist)) < 1e-8
+
+
+def test_euler_column_parity():
+    """Clamped–clamped column with a small imperfection (tests/solver/test_column.py)."""
+    L, T, W = 0.1, 0.5e-3, 5e-3
+    n = 61
+    ds = L / (n - 2)
+    x = -0.5 * ds + ds * np.arange(n)
+    z = 3e-4 * L * 0.5 * (1 - np.cos(2 * np.pi * np.clip(x, 0, L) / L))
+    xz = np.stack([x, z], 1)
+    planar = Structure()
+    planar.add_rod(xz, width=W, thickness=T, E=E)
+    planar.fix(0, "xz")
+    planar.fix(1, "xz")
+    planar.rigid([n - 2, n - 1])
+    planar.fix(n - 1, "z")
+    p2 = planar.push(n - 1, direction=(-1.0, 0.0), distance=0.03 * L, method="mgdc")
+    st = Structure3D()
+    rod = st.add_rod(_planar_to_3d(xz), width=W, thickness=T, E=E, nu=NU, normal=(0, 0, 1))
+    st.clamp(0, toward=1)
+    st.fix(1, "xyz")
+    st.rigid([n - 2, n - 1])
+    st.fix(n - 1, "yz")
+    p3 = st.push(rod.nodes[-1], direction=(-1.0, 0.0, 0.0), distance=0.03 * L, method="mgdc")
+    assert p3.status == "ok" and p2.status == "ok"
+    assert _compare(p3, p2, np.linspace(0.001, 0.029, 30) * L) < 1e-6
+    EI = E * W * T**3 / 12
+    window = (p3.displacement > 0.005 * L) & (p3.displacement < 0.02 * L)
+    assert abs(p3.force[window].mean() / (4 * np.pi**2 * EI / L**2) - 1) < 0.01
+
+
+def test_centre_clamped_arch_parity():
+    """The clamped–clamped cosine arch pushed at its midpoint through snap-through
+    (`solver.reference_models.clamped_arch`)."""
+    h, n = 0.01, 61
+    planar, mid, EI = reference_models.clamped_arch(h, n_nodes=n)
+    p2 = planar.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
+    X = planar.reference_positions
+    st = Structure3D()
+    rod = st.add_rod(_planar_to_3d(X), width=5e-3, thickness=0.5e-3, E=2.2e9, nu=NU,
+                     normal=(0, 0, 1))
+    st.clamp(0, toward=1)
+    st.clamp(n - 1, toward=n - 2)
+    for node in (1, n - 2):
+        st.fix(node, "xyz")
+    st.rigid([mid - 1, mid, mid + 1])
+    st.fix(mid, "xy")
+    p3 = st.push(rod.nodes[mid], direction=(0.0, 0.0, -1.0), distance=2.2 * h, method="mgdc")
+    assert p3.status == "ok" and p2.status == "ok"
+    assert _compare(p3, p2, np.linspace(0.02, 2.15, 40) * h) < 1e-6
+    assert p3.force.max() == pytest.approx(p2.force.max(), rel=1e-6)
+    assert p3.force.min() == pytest.approx(p2.force.min(), rel=1e-6)
+
+
+def ltb_cantilever(n, L=0.1, t=0.5e-3, w=10e-3):
+    x = np.linspace(0.0, L, n)
+    st = Structure3D()
+    rod = st.add_rod(np.stack([x, 0 * x, 0 * x], 1), width=w, thickness=t, E=E, nu=NU,
+                     normal=(0.0, 1.0, 0.0))  # thin along y: z is the stiff direction
+    st.clamp(rod.nodes[0], toward=rod.nodes[1])
+    r = st.rods[0]
+    return st, rod, float(r.EI1[0]), float(r.EI2[0]), float(r.GJ[0])
+
+
+def ltb_ratio(n):
+    """(P_bif L^2 / sqrt(EI1 GJ), the path) of the LTB cantilever with n nodes."""
+    L = 0.1
+    st, rod, EI1, EI2, GJ = ltb_cantilever(n, L)
+    P_guess = 4.013 * np.sqrt(EI1 * GJ) / L**2
+    d_cr = P_guess * L**3 / (3 * EI2)  # stiff-direction tip deflection at P_cr
+    path = st.push(rod.nodes[-1], direction=(0.0, 0.0, -1.0), distance=2.0 * d_cr,
+                   method="mgdc")
+    bif = path.bifurcations
+    assert path.status == "ok", path.status
+    assert len(bif) >= 1 and bif[0].located and bif[0].switched
+    return bif[0].F * L**2 / np.sqrt(EI1 * GJ), path, (EI1, EI2, GJ)
+
+
+@pytest.mark.slow
+def test_lateral_torsional_buckling_of_a_cantilever_strip():
+    ratios = {}
+    for n in (26, 51, 101):
+        ratios[n], path, (EI1, EI2, GJ) = ltb_ratio(n)
+    # within 2 % of Prandtl's 4.013 at about 100 nodes
+    assert abs(ratios[101] / 4.013 - 1) < 0.02
+    # converging: the change halves at least with every doubling (O(N^-2): quarters)
+    assert abs(ratios[101] - ratios[51]) < 0.5 * abs(ratios[51] - ratios[26])
+    # and to the value with the finite-EI2 correction (Richardson-extrapolated limit)
+    limit = ratios[101] + (ratios[101] - ratios[51]) / 3.0
+    corrected = 4.013 / np.sqrt((1 - EI1 / EI2) * (1 - GJ / EI2))
+    assert abs(limit / corrected - 1) < 2e-3
+    # the switched branch buckles sideways and twists; the primary stays planar before it
+    before = path.force < 0.99 * path.bifurcations[0].F
+    assert np.max(np.abs(path.positions[before][:, :, 1])) < 1e-9
+    assert np.max(np.abs(path.positions[-1, -1, 1])) > 1e-3
+    assert np.max(np.abs(path.twist[-1])) > 1e-2
+    assert np.all(path.negative_eigenvalues[-5:] == 0)  # stable post-buckled branch

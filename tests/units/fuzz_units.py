@@ -1,0 +1,132 @@
+"""Random unit geometries over the whole valid domain of `units.UnitGeometry`.
+
+    python tests/units/fuzz_units.py --n 3000        # `make fuzz`
+
+Each geometry is drawn log-uniformly in L (1 mm to 10 m), t/L (1e-5 to 0.05), w/L and
+b/L inside the domain's edges, E (1 to 1e200 Pa), uniformly in h/span (0 to 1), with random
+joint and bond lengths, and simulated with a wall-time limit. Checked: every call returns
+within its limit (plus a margin), with a known status; every "ok" result is bistable with
+finite numbers and its state (iii) is stable when re-checked independently (negative
+eigenvalues of the tangent stiffness with the apex unloaded); "bistable" never comes with
+another status.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+
+PREFIXES = ("ok", "monostable", "second state unstable", "timeout", "not converged")
+
+
+def random_geometry(rng):
+    """Keyword arguments of one valid UnitGeometry (retries until valid)."""
+    from units.geometry import (MIN_FLAT_FRACTION, MIN_SECTION_FRACTION, MIN_SPAN_FRACTION,
+                                MIN_WIDTH_FRACTION, geometry_problem)
+
+    while True:
+        L = 10 ** rng.uniform(-3, 1)
+        t = L * 10 ** rng.uniform(math.log10(MIN_SECTION_FRACTION), math.log10(0.05))
+        flat = L * 10 ** rng.uniform(math.log10(MIN_FLAT_FRACTION),
+                                     math.log10(0.5 * (1 - MIN_SPAN_FRACTION)))
+        w = flat * 10 ** rng.uniform(math.log10(max(MIN_WIDTH_FRACTION * L / flat, 1e-6)), 0)
+        b = max(flat - w, 0.0) if rng.random() < 0.8 else 0.0
+        span = L - 2 * (b + w)
+        h = span * rng.uniform(0.0, 1.0) if rng.random() < 0.97 else 0.0
+        E = 10 ** rng.uniform(0, 200)
+        kw = dict(L=L, h=h, t=t, w=w, b=b, E=E)
+        if rng.random() < 0.5:
+            kw["joint_length"] = 0.0 if rng.random() < 0.3 else rng.uniform(0, 0.3) * span
+        if rng.random() < 0.3:
+            kw["bond_length"] = (b + w) * rng.uniform(0.05, 1.0)
+        if not geometry_problem(**kw):
+            return kw
+
+
+def check_one(kw, time_limit, nodes):
+    """Simulate one geometry; returns (problems list, status prefix, seconds)."""
+    from solver.stability import state_stability
+    from units import UnitGeometry, simulate_unit
+    from units.geometry import build_unit
+    from units.planar import E_INTERNAL, L_INTERNAL
+
+    g = UnitGeometry(**kw)
+    t0 = time.perf_counter()
+    r = simulate_unit(g, nodes=nodes, time_limit=time_limit, critical=False,
+                      check_self_standing=False)
+    dt = time.perf_counter() - t0
+    problems = []
+    prefix = next((p for p in PREFIXES if r.status.startswith(p)), None)
+    if prefix is None:
+        problems.append(f"unknown status {r.status!r}")
+    if dt > time_limit + 10.0:
+        problems.append(f"took {dt:.1f} s with time_limit {time_limit} s")
+    if r.bistable and r.status != "ok":
+        problems.append(f"bistable with status {r.status!r}")
+    if r.status == "ok":
+        vals = [r.F_cr, r.d_cr, r.d_unstable, r.d_second, r.S, r.theta_deg, r.energy_barrier,
+                r.energy_stored]
+        if not r.bistable:
+            problems.append("ok but not bistable")
+        if not np.all(np.isfinite(vals)) or not np.all(np.isfinite(r.base_shape)):
+            problems.append(f"NaN/inf in an ok result: {vals}")
+        else:
+            # independent stability check of state (iii), at the reference scale
+            gi = g.scaled(L_INTERNAL / g.L)
+            import dataclasses
+
+            gi = dataclasses.replace(gi, E=E_INTERNAL)
+            m = build_unit(gi, nodes=nodes if nodes else 101)
+            pos = m.structure.reference_positions.copy()
+            pos[m.arch_nodes] = r.shapes["iii"]["arch"] * (L_INTERNAL / g.L)
+            pos[m.base_nodes] = r.shapes["iii"]["base"] * (L_INTERNAL / g.L)
+            try:
+                s = state_stability(m.structure, pos, m.apex)
+                if s.negative_force != 0:
+                    problems.append(f"bistable with {s.negative_force} negative eigenvalues in (iii)")
+            except ValueError as exc:
+                problems.append(f"bistable with a singular state (iii): {exc}")
+    return problems, prefix or r.status, dt
+
+
+def run(n, seed=0, time_limit=5.0, nodes=41, log=None):
+    """Fuzz n geometries; returns (problems [(kw, list)], status counts, slowest seconds)."""
+    rng = np.random.default_rng(seed)
+    bad, counts, slowest = [], {}, 0.0
+    for i in range(n):
+        kw = random_geometry(rng)
+        problems, prefix, dt = check_one(kw, time_limit, nodes)
+        counts[prefix] = counts.get(prefix, 0) + 1
+        slowest = max(slowest, dt)
+        if problems:
+            bad.append((kw, problems))
+        if log and (i + 1) % 100 == 0:
+            log(f"{i + 1}/{n}: {counts}, slowest {slowest:.1f} s, {len(bad)} problems")
+    return bad, counts, slowest
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--n", type=int, default=3000)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--time-limit", type=float, default=5.0)
+    p.add_argument("--nodes", type=int, default=41)
+    a = p.parse_args(argv)
+    t0 = time.perf_counter()
+    bad, counts, slowest = run(a.n, a.seed, a.time_limit, a.nodes, log=print)
+    print(f"{a.n} geometries in {time.perf_counter() - t0:.0f} s: {counts}; slowest "
+          f"{slowest:.1f} s (limit {a.time_limit} s); {len(bad)} with problems")
+    for kw, problems in bad[:20]:
+        print("  ", kw, problems)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
