@@ -7,7 +7,7 @@ JOBS   ?=
 MAPS_FLAGS ?=
 
 .DEFAULT_GOAL := help
-.PHONY: help venv test test-fast bench maps maps-ci maps-accuracy check-maps figures test-nojit clean
+.PHONY: help venv test test-fast bench maps maps-ci maps-accuracy check-maps figures fuzz test-nojit clean
 
 help:  ## list the targets
 	@echo "snapmorph make targets:"
@@ -44,6 +44,9 @@ maps-accuracy: $(STAMP)  ## interpolated map values against direct simulation at
 
 figures: $(STAMP)  ## write the paper's figures into figures/ with a gallery page figures/index.md
 	$(PY) -m snapmorph figures --out figures
+
+fuzz: $(STAMP)  ## 3,000 random unit geometries over the whole valid domain (no hang, bistable = stable, no NaN)
+	$(PY) tests/units/fuzz_units.py --n 3000 --time-limit 2
 
 test-nojit: $(STAMP)  ## run the kernel tests as plain Python (NUMBA_DISABLE_JIT=1), for debugging
 	NUMBA_DISABLE_JIT=1 $(PY) -m pytest -q tests/solver/test_energies.py tests/solver/test_banded.py

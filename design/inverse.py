@@ -1223,7 +1223,8 @@ def _curve_design(target: Target, t, w, dm, tol, placement, L_range, hL_range, m
             continue
         seen.add(key)
         if sum(1 for s in sides if s) > max_units:
-            tried.append((q, len(sides), None))
+            tried.append((q, len(sides), f"the layout needs {sum(1 for s in sides if s)} arched "
+                                         f"units > max_units = {max_units}"))
             break
         model = _FastModel(dm, t, w, sides, state_kw)
         fit = _Fit(model, target, lim, placement)
@@ -1268,7 +1269,8 @@ def _curve_design(target: Target, t, w, dm, tol, placement, L_range, hL_range, m
         if best.max_deviation <= tol:
             break
     if best is None:
-        raise ValueError("no design: " + "; ".join(str(e) for _, _, e in tried if isinstance(e, str)))
+        raise ValueError("no design: " + "; ".join(str(e) for _, _, e in tried if isinstance(e, str))
+                         + "; raise max_units or L_range")
     x0, y0, a0 = best.placements["best"]
     best = _assess(best, target.xy, dm, state_kw, placement, tol, start=(x0, y0), angle=a0)
     best.history = tried

@@ -242,6 +242,11 @@ def _available_cores() -> int:
         return max(os.cpu_count() or 1, 1)
 
 
+def MAX_LOCAL_WORKERS() -> int:  # noqa: N802 - a bound, computed for this machine
+    """The most worker processes a local cluster may start: 4 per core, at least 8."""
+    return max(8, 4 * _available_cores())
+
+
 def _scheduler_address(scheduler):
     if scheduler:
         return str(scheduler)
@@ -362,6 +367,9 @@ def build_map(grid, out, *, solve=_DEFAULT, kind="unit", warm=_DEFAULT, schedule
     spec.check_grid(grid)
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    if workers is not None and not _scheduler_address(scheduler) and workers > MAX_LOCAL_WORKERS():
+        raise ValueError(f"workers (--workers) must be <= {MAX_LOCAL_WORKERS()} worker processes for a "
+                         f"local cluster on this machine ({_available_cores()} cores), got {workers}")
     if batch_size is not None and (isinstance(batch_size, bool) or not isinstance(batch_size, int)
                                    or batch_size < 1):
         raise ValueError(f"batch_size must be an integer >= 1, got {batch_size!r}")
@@ -393,6 +401,9 @@ def build_map(grid, out, *, solve=_DEFAULT, kind="unit", warm=_DEFAULT, schedule
         if recorded and recorded["inputs"]:
             changed = ", ".join(differences(recorded["inputs"], inputs)) or "fingerprint"
             warnings.warn(f"rebuilding {out}: its inputs differ from this build's ({changed})", stacklevel=2)
+        elif not recorded:
+            warnings.warn(f"rebuilding {out}: it records no build inputs (built by an older snapmorph, "
+                          f"or not a map)", stacklevel=2)
 
     coords = grid.points()
     ckpt = open_checkpoint(out, grid, solve, restart=restart, kind=spec, identity=identity)

@@ -28,6 +28,14 @@ JOINT_LENGTH_OVER_L = 0.03175
 BOND_LENGTH = "b+w"
 
 
+def _joint_length(L: float) -> float:
+    """The maps' joint (m) for base length L: exactly `UnitGeometry`'s default 1/8 in at the
+    reference L = 0.1 m (so that a map point and a default `simulate_unit` are identical)."""
+    from units.geometry import JOINT_LENGTH_DEFAULT
+
+    return JOINT_LENGTH_DEFAULT if L == L_REF else JOINT_LENGTH_OVER_L * L
+
+
 def model_options() -> dict:
     """The unit-model options a map is built with (recorded as global attributes, and part of
     a build's fingerprint)."""
@@ -128,7 +136,7 @@ def solve_point(h_over_L, t_over_L, w_over_L, b_over_L=0.0, resolution=None,
     L = L_REF
     try:
         g = UnitGeometry(L=L, h=h_over_L * L, t=t_over_L * L, w=w_over_L * L, b=b_over_L * L,
-                         E=E_REF, joint_length=JOINT_LENGTH_OVER_L * L)
+                         E=E_REF, joint_length=_joint_length(L))
     except ValueError as exc:
         return empty_record(samples, INVALID_GEOMETRY, f"invalid geometry: {exc}")
     except Exception as exc:

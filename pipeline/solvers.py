@@ -395,6 +395,15 @@ def _unit_resolve_options(options):
     opts = dict(options)
     if opts.get("resolution") is None:
         opts["resolution"] = default_resolution()
+    else:
+        try:
+            from units.geometry import check_nodes
+        except ImportError:  # an older solver without the check: its own errors per point
+            return opts
+        try:
+            opts["resolution"] = check_nodes(opts["resolution"])
+        except ValueError as exc:
+            raise ValueError(f"resolution: {exc}") from None
     return opts
 
 

@@ -94,7 +94,7 @@ class BranchMonitor:
 
     def __init__(self, structure, control, branch, tol, fscale, length, nominal_step,
                  system=None, switch_size=0.5, max_switches=8, max_iter=25, load_unit=1.0,
-                 rig_step=None, prefer_rig=False):
+                 rig_step=None, prefer_rig=False, driver_max_iter=25, force_unit=1.0):
         if branch not in BRANCHES:
             raise ValueError(f"branch must be one of {BRANCHES}; got {branch!r}")
         self.structure = structure
@@ -111,6 +111,8 @@ class BranchMonitor:
         self.rig_step = None if rig_step is None else float(rig_step)
         self._held = None
         self.prefer_rig = bool(prefer_rig)
+        self.driver_max_iter = int(driver_max_iter)
+        self.force_unit = float(force_unit)  # N per unit of the systems' forces
         self._switched_at: list[np.ndarray] = []  # states of the points switched at
         self.rig_jumps: list[float] = []  # d (m) where the path jumped as a rig snaps
         self._system = system
@@ -124,7 +126,9 @@ class BranchMonitor:
     @property
     def system(self):
         if self._system is None:
-            self._system = self.structure.reduced_system()
+            from solver.continuation import _driver_system
+
+            self._system = _driver_system(self.structure)[0]
         return self._system
 
     @property
@@ -184,7 +188,7 @@ class BranchMonitor:
                 xv, yv = xr, c - b * b / (4 * a)
         d_v, F_v = (xv, yv) if control == "force" else (yv, xv)
         self.points.append(CriticalPoint("limit", control, index, float(d_v),
-                                         float(F_v) * self.load_unit))
+                                         float(F_v) * self.load_unit * self.force_unit))
 
     # ------------------------------------------------------------------ bifurcations
     def _bifurcation(self, a, b, m, index):
@@ -206,9 +210,11 @@ class BranchMonitor:
             c, phi, mu, m = located
         c.neg_force, c.neg_disp = a.neg_force, a.neg_disp
         st = self.structure
-        point = CriticalPoint("bifurcation", "both", index, c.d, c.lam * self.load_unit,
+        point = CriticalPoint("bifurcation", "both", index, c.d,
+                              c.lam * self.load_unit * self.force_unit,
                               positions=np.array(st.positions_of(c.q), copy=True),
-                              mode=expand_mode(self.system, phi, st), eigenvalue=mu,
+                              mode=expand_mode(self.system, phi, st),
+                              eigenvalue=mu * self.force_unit,
                               multiplicity=m, located=located is not None)
         self.points.append(point)
         return self._maybe_switch(point, a, b, c, phi)
@@ -390,8 +396,10 @@ class BranchMonitor:
     def held_system(self):
         """The system with the pushed displacement held (built when first needed)."""
         if self._held is None:
-            self._held = self.structure.reduced_system(
-                extra_fixed=[(self.control.node, self.control_axis)])
+            from solver.continuation import _driver_system
+
+            self._held = _driver_system(
+                self.structure, [(self.control.node, self.control_axis)])[0]
         return self._held
 
     def rig_onwards(self):
@@ -405,13 +413,15 @@ class BranchMonitor:
         c = self.history[-1]
         a = self.history[-2] if len(self.history) > 1 else c
         t0 = time.perf_counter()
-        reroute = self._rig_switch(a, c, allow_jump=True)
+        # within the driver's own iteration budget: a path stuck because the caller's
+        # max_iter is too small stays stuck
+        reroute = self._rig_switch(a, c, allow_jump=True, settle_iter=4 * self.driver_max_iter)
         self.seconds += time.perf_counter() - t0
         if reroute is not None:
             self.history = [c, reroute.state]
         return reroute
 
-    def _rig_switch(self, a, c, allow_jump=None):
+    def _rig_switch(self, a, c, allow_jump=None, settle_iter=100):
         """What a displacement-controlled rig does at the bifurcation point c (reached from
         the state a): the pushed node is moved on to d_c + rig_step and the structure settles
         into a stable equilibrium there. Newton from the point (shifted along the arriving
@@ -431,7 +441,7 @@ class BranchMonitor:
         if c.d - a.d > 1e-3 * delta:  # predictor along the arriving chord
             q += (c.q - a.q) * (delta / (c.d - a.d))
         q[held] = q0[held] + ctl.direction[axis] * (c.d + delta)
-        if not self._settle(sysd, q):
+        if not self._settle(sysd, q, settle_iter):
             return None
         F = ctl.force(sysd)
         # Did the structure stay on a branch through c, or jump to a far one (a branch

@@ -232,6 +232,18 @@ def _load_vector(system, control):
     return P
 
 
+def _driver_system(structure, extra_fixed=None):
+    """The system a path follower works on, and its force unit (N per system force unit).
+
+    A structure that offers them gives stiffnesses per unit modulus (``normalized=True``):
+    then E changes no bit of the path (only the final conversion to N and J)."""
+    try:
+        system = structure.reduced_system(extra_fixed=extra_fixed, normalized=True)
+    except TypeError:  # a structure without normalised elements
+        system = structure.reduced_system(extra_fixed=extra_fixed)
+    return system, float(getattr(system, "force_unit", 1.0))
+
+
 def _load_unit(fscale):
     """The power of two nearest the force scale (N): the drivers solve for the load factor
     lam = F / this, so that the tangent K^-1 P is of the structure's size whatever E is
@@ -285,15 +297,19 @@ def _driver_options(steps, tol, max_iter, max_steps, min_step_ratio, max_step, s
 
 
 class _Recorder:
-    """Collects the converged states of a path (through the structure's interface only)."""
+    """Collects the converged states of a path (through the structure's interface only).
+    Forces and energies come in the driver system's units and are kept in N and J
+    (``force_unit``: see `_driver_system`)."""
 
-    def __init__(self, structure):
+    def __init__(self, structure, force_unit=1.0):
         self.structure = structure
+        self.force_unit = float(force_unit)
         self.rows = {k: [] for k in ("d", "F", "q", "E", "it", "neg", "negd")}
         self.fields = {}
 
     def add(self, d, F, q, E, it, neg, negd):
         st = self.structure
+        F, E = F * self.force_unit, E * self.force_unit
         pos = np.array(st.positions_of(q), dtype=float, copy=True)
         for k, v in zip(self.rows, (d, F, pos, E, it, neg, negd)):
             self.rows[k].append(v)
@@ -455,13 +471,14 @@ def follow_displacement(
     steps, tol, max_iter, max_steps = o["steps"], o["tol"], o["max_iter"], o["max_steps"]
     time_limit = o["time_limit"]
     axis = control.axis
-    system = structure.reduced_system(extra_fixed=[(control.node, axis)])
+    system, fu = _driver_system(structure, [(control.node, axis)])
     length, fscale = structure.scales()
+    fscale /= fu  # forces below are in the system's units (N / fu)
     unit = _load_unit(fscale)
     q0 = structure.initial_state()
     held = control.member_dofs[:, axis]
     q = q0.copy()
-    rec = _Recorder(structure)
+    rec = _Recorder(structure, fu)
     system.evaluate(q)
     system.factor()
     rec.add(0.0, 0.0, q, system.energy, 0, system.negative_eigenvalues, system.negative_eigenvalues)
@@ -471,7 +488,7 @@ def follow_displacement(
                                 nominal_step=control.distance / steps,
                                 switch_size=o["switch_size"], max_switches=o["max_switches"],
                                 load_unit=unit, rig_step=o["switch_size"] * control.distance / steps,
-                                prefer_rig=True)
+                                prefer_rig=True, driver_max_iter=max_iter, force_unit=fu)
         monitor.start(PathState(q.copy(), 0.0, 0.0, -1, system.negative_eigenvalues, 0.0, 1.0,
                                 system.energy))
     dd0 = control.distance / steps
@@ -495,16 +512,16 @@ def follow_displacement(
             q_try += (q - q_prev) * (step / (d - d_prev))
         target = d + step
         q_try[held] = q0[held] + sign * target
-        fmax = max(fscale, abs(rec.rows["F"][-1]))
+        fmax = max(fscale, abs(rec.rows["F"][-1]) / fu)
         it = _newton(system, q_try, 0.0, None, tol * fmax, TOL_DISP * length, max_iter, 0.25 * length)
         if (it >= 0 and monitor is not None and step > CROSSING_REFINE * dd0
                 and monitor.suspicious(system.negative_eigenvalues, 1.0)):
             dd = step / 2  # refine a step across which the count changes
             continue
-        if it >= 0 and step > CROSSING_REFINE * dd0 and _force_turns(rec, control.force(system),
-                                                                     10 * tol * fmax):
-            # refine onto a force extremum (a kink where branches exchange); should a
-            # shorter step fail (the point may be singular), the longer one is taken
+        if it >= 0 and step > CROSSING_REFINE * dd0 and _force_turns(
+                rec, control.force(system) * fu, target, 10 * tol * fmax * fu):
+            # refine onto a force extremum or a kink (where branches exchange stability);
+            # should a shorter step fail (the point may be singular), the longer one is taken
             if turn_candidate is None:
                 turn_candidate = (q_try.copy(), target, it)
             dd = step / 2
@@ -605,8 +622,9 @@ def follow_mgdc(
                             target_iterations=(target_iterations, "int", 1, 10**4, "")))
     steps, tol, max_iter, max_steps = o["steps"], o["tol"], o["max_iter"], o["max_steps"]
     time_limit = o["time_limit"]
-    system = structure.reduced_system()
+    system, fu = _driver_system(structure)
     length, fscale = structure.scales()
+    fscale /= fu  # forces below are in the system's units (N / fu)
     tol_disp = TOL_DISP * length
     # the load factor lam is the force in units of `unit` N (see `_load_unit`)
     unit = _load_unit(fscale)
@@ -620,7 +638,7 @@ def follow_mgdc(
 
     q = structure.initial_state()
     lam = 0.0
-    rec = _Recorder(structure)
+    rec = _Recorder(structure, fu)
     system.evaluate(q)
     if not system.factor():
         raise ValueError(
@@ -641,7 +659,8 @@ def follow_mgdc(
         monitor = BranchMonitor(structure, control, branch, tol, fscale, length, s0,
                                 system=system, switch_size=o["switch_size"],
                                 max_switches=o["max_switches"], load_unit=unit,
-                                rig_step=o["switch_size"] * 0.25 * dd0)
+                                rig_step=o["switch_size"] * 0.25 * dd0,
+                                driver_max_iter=max_iter, force_unit=fu)
         neg0 = system.negative_eigenvalues
         monitor.start(PathState(q.copy(), 0.0, 0.0, neg0, neg0, 1.0, 1.0, system.energy))
     s = s0
@@ -666,7 +685,7 @@ def follow_mgdc(
         while not converged:
             if _timed_out(t0, time_limit):
                 status = (f"timeout: time_limit {time_limit:g} s reached at d = {d:.6g} m, "
-                          f"F = {lam * unit:.6g} N")
+                          f"F = {lam * unit * fu:.6g} N")
                 break
             q_try = q.copy()
             dlam = sign * s / np.linalg.norm(uP1)
@@ -722,7 +741,7 @@ def follow_mgdc(
                 if s < o["min_step_ratio"] * s0:
                     status = (
                         f"not converged: MGDC step size underflow near d = {d:.6g} m, "
-                        f"F = {lam * unit:.6g} N"
+                        f"F = {lam * unit * fu:.6g} N"
                     )
                     reroute = _rig_rescue(monitor, rec)
                     if reroute is not None:  # the rig moved on: continue from there
@@ -806,14 +825,22 @@ def _mgdc_crosses(system, uP, node_component, monitor, q, q_try):
                               orient * (1.0 if flex >= 0.0 else -1.0))
 
 
-def _force_turns(rec, F_new, noise):
-    """Does the force turn (dF changes sign, both changes above ``noise`` N) between the last
-    two path rows and a new state with force F_new?"""
-    F = rec.rows["F"]
-    if len(F) < 2:
+def _force_turns(rec, F_new, d_new, noise):
+    """Does F(d) turn or bend sharply between the last path rows and a new state (F_new N
+    at d_new m)? True when dF changes sign, or when the chord slope of the new step differs
+    from the last step's by more than half the larger of the two (a kink, e.g. where a
+    secondary branch rejoins and exchanges stability, hides inside one step); changes
+    below ``noise`` N are round-off."""
+    F, d = rec.rows["F"], rec.rows["d"]
+    if len(F) < 2 or not (d[-1] > d[-2] and d_new > d[-1]):
         return False
     before, after = F[-1] - F[-2], F_new - F[-1]
-    return abs(before) > noise and abs(after) > noise and before * after < 0.0
+    if abs(before) <= noise or abs(after) <= noise:
+        return False
+    if before * after < 0.0:
+        return True
+    s1, s2 = before / (d[-1] - d[-2]), after / (d_new - d[-1])
+    return abs(s2 - s1) > 0.5 * max(abs(s1), abs(s2))
 
 
 def _rig_rescue(monitor, rec):

@@ -123,6 +123,10 @@ class Structure:
         # real nodes in the state vector (see `clamp`)
         self._clamps: list[dict] = []
         self._replaced_bends: set[int] = set()
+        # E-free copies of the stiffness parameters (see `elements(normalized=True)`)
+        self._rod_E: list[float] = []
+        self._stretch_free: list[np.ndarray] = []
+        self._bend_free: list[np.ndarray] = []
         self._cache = None
 
     # ------------------------------------------------------------------ building
@@ -187,6 +191,9 @@ class Structure:
         self.rods.append(rod)
         self._positions.append(xz.copy())
 
+        free = Rod(nodes=nodes, width=width, thickness=thickness, E=1.0)  # per unit modulus
+        self._rod_E.append(E)
+        self._stretch_free.append(np.stack([free.EA, lengths], axis=1))
         EA = rod.EA
         self._stretch_nodes.append(np.stack([nodes[:-1], nodes[1:]], axis=1))
         self._stretch_params.append(np.stack([EA, lengths], axis=1))
@@ -200,6 +207,10 @@ class Structure:
         kappa_bar = _turning_curvatures(xz)
         self._bend_nodes.append(np.stack([nodes[:-2], nodes[1:-1], nodes[2:]], axis=1))
         self._bend_params.append(np.stack([node_stiffness, kappa_bar], axis=1))
+        EI_free = free.EI
+        self._bend_free.append(np.stack([
+            1.0 / (0.5 * lengths[:-1] / EI_free[:-1, 1] + 0.5 * lengths[1:] / EI_free[1:, 0]),
+            kappa_bar], axis=1))
         self._cache = None
         return rod
 
@@ -357,11 +368,14 @@ class Structure:
             length = float(np.linalg.norm(X[j] - X[i]))
             edge = min(i, j)
             EI = float(rod.EI[edge, 0 if j > i else 1])  # the half edge next to the node
+            EI_free = float(rod.width[edge, 0 if j > i else 1]
+                            * rod.thickness[edge, 0 if j > i else 1] ** 3 / 12.0)
             # ghost one edge length behind the node, opposite to the real edge's side
             direction = t if sgn > 0 else -t
             offset = -length * direction
             sides.append(dict(node=node, neighbour=int(rod.nodes[j]), offset=offset,
-                              stiffness=2.0 * EI / length, group=group, toward=toward,
+                              stiffness=2.0 * EI / length, stiffness_free=2.0 * EI_free / length,
+                              E=rod.E, group=group, toward=toward,
                               hold_position=bool(hold_position)))
         self._clamps.extend(sides)
         if len(sides) == 2:
@@ -416,49 +430,72 @@ class Structure:
         return best
 
     # ------------------------------------------------------------------ model arrays
-    def elements(self):
-        """The element tuple consumed by `solver.assembly` (see its docstring)."""
-        if self._cache is None:
-            def cat(parts, shape, dtype):
-                return (
-                    np.ascontiguousarray(np.concatenate(parts, axis=0), dtype=dtype)
-                    if parts
-                    else np.zeros(shape, dtype=dtype)
-                )
+    def elements(self, normalized=False):
+        """The element tuple consumed by `solver.assembly` (see its docstring).
 
-            springs_n = (
-                np.array(self._spring_nodes, dtype=np.int64).reshape(-1, 2)
+        ``normalized``: stiffnesses divided by the largest Young's modulus (per pascal): the
+        path followers work on these, so that E changes no bit of a path (`E_max` converts
+        forces and energies back)."""
+        if self._cache is None:
+            self._cache = (self._build_elements(False), self._build_elements(True))
+        return self._cache[1 if normalized else 0]
+
+    @property
+    def E_max(self) -> float:
+        """The largest Young's modulus of the rods, Pa (the normalised elements' unit)."""
+        return max(rod.E for rod in self.rods) if self.rods else 1.0
+
+    def _build_elements(self, normalized):
+        def cat(parts, shape, dtype):
+            return (
+                np.ascontiguousarray(np.concatenate(parts, axis=0), dtype=dtype)
+                if parts
+                else np.zeros(shape, dtype=dtype)
             )
-            springs_p = np.array(self._spring_params, dtype=float).reshape(-1, 3)
-            bend_n = cat(self._bend_nodes, (0, 3), np.int64)
+
+        E_max = self.E_max
+        springs_n = np.array(self._spring_nodes, dtype=np.int64).reshape(-1, 2)
+        springs_p = np.array(self._spring_params, dtype=float).reshape(-1, 3)
+        if normalized:
+            # stiffness per unit modulus: E-free section factors times E / E_max (exactly 1
+            # for a single material, so these arrays do not depend on E at all)
+            stretch_p = cat([np.stack([f[:, 0] * (E / E_max), f[:, 1]], 1)
+                             for f, E in zip(self._stretch_free, self._rod_E)], (0, 2), float)
+            bend_p = cat([np.stack([f[:, 0] * (E / E_max), f[:, 1]], 1)
+                          for f, E in zip(self._bend_free, self._rod_E)], (0, 2), float)
+            springs_p = springs_p.copy()
+            springs_p[:, 0] /= E_max
+        else:
+            stretch_p = cat(self._stretch_params, (0, 2), float)
             bend_p = cat(self._bend_params, (0, 2), float)
-            if self._clamps:
-                keep = ~np.isin(bend_n[:, 1], list(self._replaced_bends))
-                bend_n, bend_p = bend_n[keep], bend_p[keep]
-                X = self.reference_positions
-                G = self._ghost_positions(X)
-                extra_n, extra_p = [], []
-                for k, c in enumerate(self._clamps):
-                    g = self.n_nodes + k
-                    # ordered ghost -> node -> neighbour or neighbour -> node -> ghost,
-                    # along the rod's node order (the curvature's sign convention)
-                    if c["neighbour"] > c["node"]:
-                        tri, pts = (g, c["node"], c["neighbour"]), (G[k], X[c["node"]], X[c["neighbour"]])
-                    else:
-                        tri, pts = (c["neighbour"], c["node"], g), (X[c["neighbour"]], X[c["node"]], G[k])
-                    extra_n.append(tri)
-                    extra_p.append((c["stiffness"], float(_turning_curvatures(np.array(pts))[0])))
-                bend_n = np.ascontiguousarray(np.concatenate([bend_n, np.array(extra_n, dtype=np.int64)]))
-                bend_p = np.ascontiguousarray(np.concatenate([bend_p, np.array(extra_p, dtype=float)]))
-            self._cache = (
-                cat(self._stretch_nodes, (0, 2), np.int64),
-                cat(self._stretch_params, (0, 2), float),
-                bend_n,
-                bend_p,
-                np.ascontiguousarray(springs_n),
-                np.ascontiguousarray(springs_p),
-            )
-        return self._cache
+        bend_n = cat(self._bend_nodes, (0, 3), np.int64)
+        if self._clamps:
+            keep = ~np.isin(bend_n[:, 1], list(self._replaced_bends))
+            bend_n, bend_p = bend_n[keep], bend_p[keep]
+            X = self.reference_positions
+            G = self._ghost_positions(X)
+            extra_n, extra_p = [], []
+            for k, c in enumerate(self._clamps):
+                g = self.n_nodes + k
+                # ordered ghost -> node -> neighbour or neighbour -> node -> ghost,
+                # along the rod's node order (the curvature's sign convention)
+                if c["neighbour"] > c["node"]:
+                    tri, pts = (g, c["node"], c["neighbour"]), (G[k], X[c["node"]], X[c["neighbour"]])
+                else:
+                    tri, pts = (c["neighbour"], c["node"], g), (X[c["neighbour"]], X[c["node"]], G[k])
+                extra_n.append(tri)
+                k_c = c["stiffness_free"] * (c["E"] / E_max) if normalized else c["stiffness"]
+                extra_p.append((k_c, float(_turning_curvatures(np.array(pts))[0])))
+            bend_n = np.ascontiguousarray(np.concatenate([bend_n, np.array(extra_n, dtype=np.int64)]))
+            bend_p = np.ascontiguousarray(np.concatenate([bend_p, np.array(extra_p, dtype=float)]))
+        return (
+            cat(self._stretch_nodes, (0, 2), np.int64),
+            np.ascontiguousarray(stretch_p),
+            bend_n,
+            np.ascontiguousarray(bend_p),
+            np.ascontiguousarray(springs_n),
+            np.ascontiguousarray(springs_p),
+        )
 
     def supernodes(self):
         """Node -> representative of the group of nodes that share displacements."""
@@ -484,11 +521,13 @@ class Structure:
                 fixed_rep[rep[self.n_nodes + k], :] = True
         return fixed_rep[rep]
 
-    def reduced_system(self, extra_fixed=None) -> ReducedSystem:
+    def reduced_system(self, extra_fixed=None, normalized=False) -> ReducedSystem:
         """Assemble the DOF map (ordered by reverse Cuthill–McKee) and band storage.
 
         ``extra_fixed``: iterable of (node, component) pairs held or prescribed in addition
-        to the supports (the displacement-controlled DOF).
+        to the supports (the displacement-controlled DOF). ``normalized``: stiffnesses per
+        unit modulus (the system's ``force_unit`` = `E_max` Pa turns its forces, energies
+        and stiffnesses into N, J and N/m); the path followers use it.
         """
         n = self._n_total
         if self.n_nodes == 0:
@@ -546,7 +585,9 @@ class Structure:
                 bandwidth = max(bandwidth, int(np.max(hi[free] - lo[free])))
         if k == 0:
             raise ValueError("every degree of freedom is fixed: nothing to solve")
-        return ReducedSystem(elements, dof_map, k, bandwidth)
+        system = ReducedSystem(self.elements(normalized), dof_map, k, bandwidth)
+        system.force_unit = self.E_max if normalized else 1.0
+        return system
 
     # ------------------------------------------------------------------ energy access
     def energy(self, positions=None) -> float:

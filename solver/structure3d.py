@@ -704,6 +704,7 @@ class Structure3D:
                 E = evaluate(q, f)
                 g = sysm.grad[: sysm.n].copy()
                 total_it += 1
+                if __import__("os").environ.get("RELAX_DEBUG"): print(total_it, E, float(np.max(np.abs(g))), mu, step, float(np.max(np.abs(du))))
             else:
                 raise RuntimeError(f"relax did not converge in {max_iter} iterations at stage "
                                    f"{stage} of {ramp}")

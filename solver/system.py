@@ -43,6 +43,9 @@ class ReducedSystem:
         self.negative_eigenvalues = 0
         self.factor_ok = False
         self._dense_lu = None
+        # N per unit of this system's forces (Pa when its elements are per unit modulus,
+        # see `Structure.reduced_system(normalized=True)`); energies J per unit likewise
+        self.force_unit = 1.0
 
     def evaluate(self, q):
         """Assemble energy (J), gradients (N) and K (N/m) at positions ``q`` (m)."""

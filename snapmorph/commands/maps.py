@@ -20,6 +20,7 @@ DEFAULT_SOLVER = "pipeline.point:solve_point"
 DEFAULT_KIND = "unit"
 DEFAULT_TIME_LIMIT = 60.0  # s per point; pipeline.build.DEFAULT_TIME_LIMIT (not imported: --help stays light)
 DEFAULT_CONNECT_TIMEOUT = 5.0
+MAX_WORKERS = 256  # worker processes; pipeline.build.MAX_LOCAL_WORKERS bounds a local cluster further
 
 
 def _positive_int(text):
@@ -32,14 +33,16 @@ def _positive_int(text):
     return v
 
 
-def _int_at_least(low, what):
+def _int_at_least(low, what, high=None):
+    rng = f">= {low}" if high is None else f"in [{low}, {high}]"
+
     def parse(text):
         try:
             v = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {low} ({what}); got {text!r}") from None
-        if v < low:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {low} ({what}); got {text!r}")
+            raise argparse.ArgumentTypeError(f"must be an integer {rng} ({what}); got {text!r}") from None
+        if v < low or (high is not None and v > high):
+            raise argparse.ArgumentTypeError(f"must be an integer {rng} ({what}); got {text!r}")
         return v
     parse.__name__ = "integer"
     return parse
@@ -55,14 +58,18 @@ def _nonneg_float(text):
     return v
 
 
-def _seconds(text):
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number of seconds > 0; got {text!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"must be a finite number of seconds > 0; got {text!r}")
-    return v
+def _seconds(high):
+    def parse(text):
+        msg = f"must be a number of seconds in (0, {high:g}]; got {text!r}"
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(msg) from None
+        if not (math.isfinite(v) and 0 < v <= high):
+            raise argparse.ArgumentTypeError(msg)
+        return v
+    parse.__name__ = "seconds"
+    return parse
 
 
 def _max_failed(text):
@@ -114,9 +121,9 @@ def _cluster_args(p):
     p.add_argument("--scheduler", type=_scheduler, metavar="ADDRESS",
                    help="dask scheduler address or scheduler-file of an existing cluster "
                         "(default: $DASK_SCHEDULER_ADDRESS, else a local cluster)")
-    p.add_argument("--connect-timeout", type=_seconds, default=DEFAULT_CONNECT_TIMEOUT, metavar="S",
+    p.add_argument("--connect-timeout", type=_seconds(600), default=DEFAULT_CONNECT_TIMEOUT, metavar="S",
                    help=f"seconds to wait for the scheduler to answer (default {DEFAULT_CONNECT_TIMEOUT:g})")
-    p.add_argument("--workers", type=_int_at_least(1, "worker processes"), metavar="N",
+    p.add_argument("--workers", type=_int_at_least(1, "worker processes", MAX_WORKERS), metavar="N",
                    help="local worker processes (default: one per core); with --scheduler, "
                         "how many workers to wait for")
     p.add_argument("--resolution", type=_int_at_least(5, "solver nodes"), metavar="N",
@@ -126,7 +133,7 @@ def _cluster_args(p):
     p.add_argument("--solver", type=_module_function, default=None, metavar="MODULE:FUNCTION",
                    help=f"point solver, importable on the workers (default: the kind's; "
                         f"{DEFAULT_SOLVER} for unit)")
-    p.add_argument("--time-limit", type=_seconds, default=DEFAULT_TIME_LIMIT, metavar="S",
+    p.add_argument("--time-limit", type=_seconds(1e6), default=DEFAULT_TIME_LIMIT, metavar="S",
                    help=f"wall-time limit per point in seconds (default {DEFAULT_TIME_LIMIT:g}); a "
                         f"point past it gets status timeout and the build goes on")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -191,6 +198,10 @@ def _spec_and_grid(args):
             raise ValueError(f"--resolution: kind {spec.name} has no resolution option")
         grid = grid.with_resolution(args.resolution) if hasattr(grid, "with_resolution") \
             else grid.with_options(resolution=args.resolution)
+        try:
+            spec.grid_options(grid)  # the kind's own bounds (the unit: nodes in [11, 20001])
+        except ValueError as exc:
+            raise ValueError(f"--resolution {args.resolution}: {exc}") from None
     return spec, grid
 
 
@@ -346,7 +357,11 @@ def _run_info(args) -> int:
 
 def run(args) -> int:
     """Entry point of `snapmorph maps ...`."""
+    import warnings
+
     command = getattr(args, "maps_command", None)
+    # warnings (refused checkpoint files, a rebuild and why) as one line each, no source line
+    warnings.formatwarning = lambda message, category, *rest, **kw: f"snapmorph maps: warning: {message}\n"
     try:
         return _dispatch(command, args)
     except FileNotFoundError as exc:

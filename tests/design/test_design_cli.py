@@ -44,7 +44,7 @@ def test_design_writes_everything(tmp_path, capsys, synthetic_map_path):
     assert code == 0, err
     assert f"state {state}" in stdout and (tmp_path / "s.png").is_file()
     xy = np.loadtxt(tmp_path / "s.csv", delimiter=",", skiprows=1)
-    assert np.allclose(xy[0], np.array(read_placement(out / "units.csv")[:2]) * 1e3)
+    assert np.allclose(xy[0], np.array(read_placement(out / "units.csv")[:2]) * 1e3, atol=1e-3)
     # all snapped, `fk` draws what the design predicted (same map, same placement)
     every = "".join("0" if u.is_spacer else "1" for u in units)
     code, stdout, err = _run(capsys, "fk", "--units", str(out / "units.csv"), "--state", every,
@@ -136,7 +136,8 @@ def test_design_missed_tolerance_exit_1(tmp_path, capsys, synthetic_map_path):
     out = tmp_path / "missed"
     code, stdout, err = _run(capsys, "design", str(target), "--t", "0.5", "--w", "5", "--tol",
                              "0.0001", "--out", str(out), "--map", str(synthetic_map_path),
-                             "--min-barrier", "0", "--no-verify", "--no-drawings")
+                             "--min-barrier", "0", "--no-verify", "--no-drawings",
+                             "--max-units", "6")  # few layouts to try: a quick miss
     assert code == 1
     assert "TOLERANCE MISSED" in stdout
     assert "TOLERANCE MISSED" in (out / "design.txt").read_text()
@@ -151,6 +152,7 @@ def test_design_missed_tolerance_exit_1(tmp_path, capsys, synthetic_map_path):
     (["--L-range", "200,100"], "0 < MIN < MAX"),
     (["--L-range", "300,400"], "no valid unit"),
     (["--max-units", "0"], "--max-units must be >= 1"),
+    (["--max-units", "1"], "> max_units = 1"),
 ])
 def test_design_option_errors_one_line(tmp_path, capsys, synthetic_map_path, argv, message):
     target = tmp_path / "M.csv"

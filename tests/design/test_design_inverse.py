@@ -141,7 +141,7 @@ def test_out_of_reach_says_so(design_map):
     a warning and met = False, never silently."""
     with pytest.warns(UserWarning, match="tolerance missed"):
         d = inverse_design([(0, 0), (0.01, 0.002), (0.02, 0)], t=T, w=W, design_map=design_map,
-                           min_barrier=0.0)
+                           min_barrier=0.0, max_units=2)
     assert d.met is False and d.max_deviation > 0.01
     assert "TOLERANCE MISSED" in d.summary()
 

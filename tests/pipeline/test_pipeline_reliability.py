@@ -168,7 +168,10 @@ def test_exit_status_follows_failed_points(tmp_path, capsys):
 BAD = [
     (["--workers", "0"], "--workers"), (["--workers", "two"], "--workers"),
     (["--batch-size", "0"], "--batch-size"), (["--resolution", "3"], "--resolution"),
-    (["--resolution", "1e3"], "--resolution"),
+    (["--resolution", "1e3"], "--resolution"), (["--resolution", "7"], "--resolution 7: resolution"),
+    (["--resolution", "1000000"], "--resolution"), (["--workers", "100000"], "--workers"),
+    (["--workers", "200"], "--workers"), (["--time-limit", "1e300"], "--time-limit"),
+    (["--connect-timeout", "1e9"], "--connect-timeout"),
     (["--time-limit", "0"], "--time-limit"), (["--time-limit", "-5"], "--time-limit"),
     (["--time-limit", "nan"], "--time-limit"), (["--time-limit", "inf"], "--time-limit"),
     (["--connect-timeout", "0"], "--connect-timeout"),
