@@ -47,15 +47,19 @@ TABLE3_S = (106.7, 25.8)
 # --- forward kinematics ---------------------------------------------------------------------------
 def three_units(design_map=None, source: str = "map") -> dict:
     """{state: Chain} of the paper's three identical units. From the map, b is the map's b/L
-    times L (0 for the default map, as the paper's parametric study); simulated, b = w as the
+    times L (0 for the default map, as the paper's parametric study), released units (the
+    actuated state (iii) on a schema-1 map, which has no other); simulated, b = w as the
     paper's specimens."""
+    kw = {}
     if source == "map":
         dm = design_map if design_map is not None else load_map()
         b = MapLookup(dm).b_over_L * FK_UNIT["L"]
+        if "released" not in getattr(dm, "states", ("released",)):
+            kw["state"] = "actuated"  # a schema-1 map has only state (iii) with the actuator
     else:
         dm, b = None, W
     unit = Unit(**FK_UNIT, side=1, b=b)
-    return all_states([unit] * 3, source=source, design_map=dm, chains=True)
+    return all_states([unit] * 3, source=source, design_map=dm, chains=True, **kw)
 
 
 # --- the M ----------------------------------------------------------------------------------------

@@ -211,7 +211,7 @@ def make(out, tilts=(0.0, 1.0, 2.0, 5.0), heights_mm=(20.0, 40.0), nodes=None):
             rows.append({"h": gh.h, "tilt_deg": tilt, "F_cr": r.F_cr, "theta_deg": r.theta_deg,
                          "S": r.S, "status": r.status})
     plot_knockdown(rows, os.path.join(out, "unit3d_knockdown.png"))
-    plot_unit2d_states(simulate_unit_2d(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3)),
+    plot_unit2d_states(simulate_unit_2d(UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)),
                        os.path.join(out, "unit2d_states.png"))
     return rows
 

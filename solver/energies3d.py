@@ -177,15 +177,15 @@ def bending_terms(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess):
     (N m) and natural integrated curvatures; writes grad (18,) and hess (18, 18).
 
     Each curvature depends on 9 numbers (t_a, t_b and the sum of two directors): its
-    derivatives are taken in those and scattered to the 12 components of z it reads."""
+    derivatives are taken in those and scattered to the four 3-blocks of z it reads."""
     grad[:] = 0.0
     hess[:, :] = 0.0
     y = np.empty(9)
     g9 = np.empty(9)
     h9 = np.empty((9, 9))
-    zi = np.empty(12, dtype=np.int64)
-    yi = np.empty(12, dtype=np.int64)
-    sg = np.empty(12)
+    oz = np.empty(4, dtype=np.int64)  # z offset of each 3-block
+    oy = np.array([0, 3, 6, 6])  # y offset of each 3-block
+    sb = np.empty(4)
     energy = 0.0
     for which in range(1, 3):
         ua = _CURV_U[which - 1, 0]
@@ -195,28 +195,31 @@ def bending_terms(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess):
             y[k] = z[k]
             y[3 + k] = z[9 + k]
             y[6 + k] = sgn * (z[ua + k] + z[ub + k])
-            zi[k] = k
-            zi[3 + k] = 9 + k
-            zi[6 + k] = ua + k
-            zi[9 + k] = ub + k
-            yi[k] = k
-            yi[3 + k] = 3 + k
-            yi[6 + k] = 6 + k
-            yi[9 + k] = 6 + k
-            sg[k] = 1.0
-            sg[3 + k] = 1.0
-            sg[6 + k] = sgn
-            sg[9 + k] = sgn
+        oz[0] = 0
+        oz[1] = 9
+        oz[2] = ua
+        oz[3] = ub
+        sb[0] = 1.0
+        sb[1] = 1.0
+        sb[2] = sgn
+        sb[3] = sgn
         kappa = _curvature9(y, g9, h9)
         kk = k1 if which == 1 else k2
         dk = kappa - (kappa1_bar if which == 1 else kappa2_bar)
         energy += 0.5 * kk * dk * dk
-        for a in range(12):
-            ga = sg[a] * g9[yi[a]]
-            grad[zi[a]] += kk * dk * ga
-            for b in range(12):
-                gb = sg[b] * g9[yi[b]]
-                hess[zi[a], zi[b]] += kk * (ga * gb + dk * sg[a] * sg[b] * h9[yi[a], yi[b]])
+        for A in range(4):
+            za = oz[A]
+            ya = oy[A]
+            for i in range(3):
+                grad[za + i] += kk * dk * sb[A] * g9[ya + i]
+            for B in range(4):
+                zb = oz[B]
+                yb = oy[B]
+                s_ab = kk * sb[A] * sb[B]
+                for i in range(3):
+                    gi = g9[ya + i]
+                    for j in range(3):
+                        hess[za + i, zb + j] += s_ab * (gi * g9[yb + j] + dk * h9[ya + i, yb + j])
     return energy
 
 
@@ -284,7 +287,6 @@ def chain_pair(gz, hz, jac_a, hess_a, sign_a, jac_b, hess_b, sign_b, g8, h8):
             J[9 + c, 4 + r] = fb * jac_b[c, r]
     HJ = np.zeros((18, 8))
     for i in range(18):
-        s0 = 0 if i < 9 else 9  # hz is dense, J block diagonal: use both blocks
         for r in range(8):
             blk = 0 if r < 4 else 9
             acc = 0.0
@@ -316,33 +318,28 @@ def chain_pair(gz, hz, jac_a, hess_a, sign_a, jac_b, hess_b, sign_b, g8, h8):
 
 @njit(cache=True)
 def tip_moment_terms(e, moment, axis, grad, hess):
-    """Potential (J) of a dead couple ``moment`` (N m) about the unit ``axis`` acting on an
-    edge ``e`` (3,) that turns in the plane normal to the axis: V = -M phi, phi the angle of
-    e about the axis (measured from the reference direction of its plane projection is not
-    needed: only derivatives matter and phi = atan2 is used directly). Writes grad (3,) and
-    hess (3, 3) w.r.t. e."""
-    # basis of the plane normal to the axis
-    a = axis
-    if abs(a[0]) < 0.9:
-        ux, uy, uz = 0.0 - a[0] * a[0], 0.0 - a[1] * a[0] + 0.0, 0.0 - a[2] * a[0]
-        ux += 1.0
+    """Potential (J) of a dead couple ``moment`` (N m) about the unit ``axis`` on an edge
+    ``e`` (3,) m that turns in the plane normal to the axis: V = -M phi, phi = the edge's
+    angle about the axis (atan2 in that plane, so valid for |phi| < pi from the plane's
+    first basis vector). Writes grad (3,) (N) and hess (3, 3) (N/m) w.r.t. e."""
+    # orthonormal basis (u, v) of the plane normal to the axis, v = axis x u
+    if abs(axis[0]) < 0.9:
+        u = np.array([1.0 - axis[0] * axis[0], -axis[1] * axis[0], -axis[2] * axis[0]])
     else:
-        ux, uy, uz = 0.0 - a[0] * a[1], 1.0 - a[1] * a[1], 0.0 - a[2] * a[1]
-    nu = np.sqrt(ux * ux + uy * uy + uz * uz)
-    u = np.array([ux / nu, uy / nu, uz / nu])
-    v = np.array([a[1] * u[2] - a[2] * u[1], a[2] * u[0] - a[0] * u[2], a[0] * u[1] - a[1] * u[0]])
+        u = np.array([-axis[0] * axis[1], 1.0 - axis[1] * axis[1], -axis[2] * axis[1]])
+    u /= np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+    v = np.array([axis[1] * u[2] - axis[2] * u[1], axis[2] * u[0] - axis[0] * u[2],
+                  axis[0] * u[1] - axis[1] * u[0]])
     p = e[0] * u[0] + e[1] * u[1] + e[2] * u[2]
     r = e[0] * v[0] + e[1] * v[1] + e[2] * v[2]
     rho2 = p * p + r * r
     phi = np.arctan2(r, p)
-    # d phi = (p dr - r dp) / rho2
-    for i in range(3):
-        grad[i] = -moment * (p * v[i] - r * u[i]) / rho2
+    # d phi / de = (p v - r u) / rho2
     for i in range(3):
         gi = p * v[i] - r * u[i]
+        grad[i] = -moment * gi / rho2
         for j in range(3):
             dgi = u[j] * v[i] - v[j] * u[i]
-            gj = p * v[j] - r * u[j]
-            drho = 2.0 * (p * u[j] + r * v[j])
-            hess[i, j] = -moment * (dgi / rho2 - gi * drho / (rho2 * rho2))
+            drho2 = 2.0 * (p * u[j] + r * v[j])
+            hess[i, j] = -moment * (dgi / rho2 - gi * drho2 / (rho2 * rho2))
     return -moment * phi

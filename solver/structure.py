@@ -17,10 +17,17 @@ from solver.system import ReducedSystem
 
 _COMPONENTS = {"x": (0,), "z": (1,), "xz": (0, 1), "zx": (0, 1)}
 
-# The thinnest rod `add_rod` accepts: arc length / smallest thickness. Beyond it the ratio of
-# stretching to bending stiffness, 12 (length / thickness)^2 / (edge / length), passes ~1e13
-# and paths stop converging in double precision (measured: 1e5 solves, 3.3e5 fails).
-MAX_SLENDERNESS = 2e5
+# The thinnest rod `add_rod` accepts: arc length / smallest thickness. The ratio of
+# stretching to bending stiffness grows as 12 (length / thickness)^2 (length / edge), and
+# beyond this paths stop converging in double precision (measured on a clamped arch:
+# 3e4 solves, 1e5 fails for some pushes, 3.3e5 for all).
+MAX_SLENDERNESS = 3e4
+
+# The reference modulus (Pa) of the normalised elements the path followers work on: every
+# structure is solved as if made of this material and its forces scaled by E_max / E_REF
+# afterwards, so E changes no bit of a path. It is the project's default material (PETG,
+# 2.2 GPa), for which the normalised and physical systems coincide exactly.
+E_REF = 2.2e9
 
 
 @dataclass(frozen=True)
@@ -191,7 +198,7 @@ class Structure:
         self.rods.append(rod)
         self._positions.append(xz.copy())
 
-        free = Rod(nodes=nodes, width=width, thickness=thickness, E=1.0)  # per unit modulus
+        free = Rod(nodes=nodes, width=width, thickness=thickness, E=E_REF)  # see E_REF
         self._rod_E.append(E)
         self._stretch_free.append(np.stack([free.EA, lengths], axis=1))
         EA = rod.EA
@@ -368,7 +375,7 @@ class Structure:
             length = float(np.linalg.norm(X[j] - X[i]))
             edge = min(i, j)
             EI = float(rod.EI[edge, 0 if j > i else 1])  # the half edge next to the node
-            EI_free = float(rod.width[edge, 0 if j > i else 1]
+            EI_free = float(E_REF * rod.width[edge, 0 if j > i else 1]
                             * rod.thickness[edge, 0 if j > i else 1] ** 3 / 12.0)
             # ghost one edge length behind the node, opposite to the real edge's side
             direction = t if sgn > 0 else -t
@@ -433,9 +440,9 @@ class Structure:
     def elements(self, normalized=False):
         """The element tuple consumed by `solver.assembly` (see its docstring).
 
-        ``normalized``: stiffnesses divided by the largest Young's modulus (per pascal): the
-        path followers work on these, so that E changes no bit of a path (`E_max` converts
-        forces and energies back)."""
+        ``normalized``: the same structure made of the reference material (E_max -> E_REF,
+        other rods in proportion): the path followers work on these, so that E changes no
+        bit of a path (forces and energies scale back by E_max / E_REF)."""
         if self._cache is None:
             self._cache = (self._build_elements(False), self._build_elements(True))
         return self._cache[1 if normalized else 0]
@@ -457,14 +464,14 @@ class Structure:
         springs_n = np.array(self._spring_nodes, dtype=np.int64).reshape(-1, 2)
         springs_p = np.array(self._spring_params, dtype=float).reshape(-1, 3)
         if normalized:
-            # stiffness per unit modulus: E-free section factors times E / E_max (exactly 1
-            # for a single material, so these arrays do not depend on E at all)
+            # section factors computed with E_REF, times E / E_max (exactly 1 for a single
+            # material, so these arrays do not depend on E at all)
             stretch_p = cat([np.stack([f[:, 0] * (E / E_max), f[:, 1]], 1)
                              for f, E in zip(self._stretch_free, self._rod_E)], (0, 2), float)
             bend_p = cat([np.stack([f[:, 0] * (E / E_max), f[:, 1]], 1)
                           for f, E in zip(self._bend_free, self._rod_E)], (0, 2), float)
             springs_p = springs_p.copy()
-            springs_p[:, 0] /= E_max
+            springs_p[:, 0] *= E_REF / E_max
         else:
             stretch_p = cat(self._stretch_params, (0, 2), float)
             bend_p = cat(self._bend_params, (0, 2), float)
@@ -525,9 +532,10 @@ class Structure:
         """Assemble the DOF map (ordered by reverse Cuthill–McKee) and band storage.
 
         ``extra_fixed``: iterable of (node, component) pairs held or prescribed in addition
-        to the supports (the displacement-controlled DOF). ``normalized``: stiffnesses per
-        unit modulus (the system's ``force_unit`` = `E_max` Pa turns its forces, energies
-        and stiffnesses into N, J and N/m); the path followers use it.
+        to the supports (the displacement-controlled DOF). ``normalized``: the structure
+        made of the reference material (`E_REF`); the system's ``force_unit`` = E_max / E_REF
+        turns its forces, energies and stiffnesses into N, J and N/m. The path followers use
+        it: paths then do not depend on E at all, bit for bit.
         """
         n = self._n_total
         if self.n_nodes == 0:
@@ -586,7 +594,7 @@ class Structure:
         if k == 0:
             raise ValueError("every degree of freedom is fixed: nothing to solve")
         system = ReducedSystem(self.elements(normalized), dof_map, k, bandwidth)
-        system.force_unit = self.E_max if normalized else 1.0
+        system.force_unit = self.E_max / E_REF if normalized else 1.0
         return system
 
     # ------------------------------------------------------------------ energy access

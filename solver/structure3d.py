@@ -262,13 +262,6 @@ class Structure3D:
         self._cache = None
         return rod
 
-    def _edge_data(self, edge):
-        """(rod, local edge index) of a global edge."""
-        for rod in self.rods:
-            if rod.edges[0] <= edge <= rod.edges[-1]:
-                return rod, int(edge - rod.edges[0])
-        raise IndexError(edge)
-
     def _frame(self, rod, j):
         r = next(i for i, other in enumerate(self.rods) if other is rod)
         return self._tangents[r][j], self._directors[r][j], self._lengths[r][j]
@@ -374,6 +367,14 @@ class Structure3D:
         # edge of rod a pointing into the joint, edge of rod b pointing out of it
         ja, sa = (ia - 1, 1.0) if ia > 0 else (0, -1.0)
         jb, sb = (ib, 1.0) if ib < len(rod_b.nodes) - 1 else (ib - 1, -1.0)
+        ta = sa * self._frame(rod_a, ja)[0]
+        tb = sb * self._frame(rod_b, jb)[0]
+        if ta @ tb < -0.9:
+            raise ValueError(
+                f"joint({a}, {b}) would couple the edge of node_a's rod into the joint with an "
+                "almost opposite edge of node_b's rod out of it (a fold of more than ~150 "
+                "degrees, where the curvature measure is singular); swap node_a and node_b "
+                "or tie the nodes")
         self._merges.append((a, b))
         self._pairs[("joint", a, b, len(self._pairs))] = self._make_pair(rod_a, ja, sa, rod_b, jb, sb)
         self._cache = None
@@ -606,7 +607,17 @@ class Structure3D:
             return follow_mgdc(self, control, **options)
         return follow_displacement(self, control, **options)
 
-    def relax(self, q=None, moments=(), ramp=1, tol=1e-10, max_iter=100):
+    def solve_equilibrium(self, positions=None, node=None, direction=(0.0, 0.0, -1.0),
+                          force=0.0, **options):
+        """Newton from ``positions`` ((n_nodes, 3) m or a full state; default stress free) to
+        the equilibrium under ``force`` (N) on ``node`` along ``direction`` (no load when
+        ``node`` is None), with the planar solver's `solver.continuation.equilibrium`.
+        Returns (positions (n_nodes, 3), info dict with the full "state")."""
+        from solver.continuation import equilibrium
+
+        return equilibrium(self, positions, node, direction, force, **options)
+
+    def relax(self, q=None, moments=(), ramp=1, tol=1e-8, max_iter=100):
         """Minimise the energy from the state ``q`` (default: stress free) by damped Newton
         (banded Newton where K is positive definite, else a dense Levenberg–Marquardt shift;
         every step must lower the energy), optionally under dead couples ``moments`` =
@@ -698,13 +709,12 @@ class Structure3D:
                     if shift > 1e12 * diag:
                         raise RuntimeError("relax: no energy decrease along the gradient")
                 du_max = float(np.max(np.abs(du))) if (mu == 0.0 and step == 1.0) else np.inf
-                shift = 0.25 * shift if shift > 1e-6 else 0.0
+                shift = 0.25 * shift if K is not None and shift > 1e-6 * diag else 0.0
                 q = q_try
                 sysm.accept(q)
                 E = evaluate(q, f)
                 g = sysm.grad[: sysm.n].copy()
                 total_it += 1
-                if __import__("os").environ.get("RELAX_DEBUG"): print(total_it, E, float(np.max(np.abs(g))), mu, step, float(np.max(np.abs(du))))
             else:
                 raise RuntimeError(f"relax did not converge in {max_iter} iterations at stage "
                                    f"{stage} of {ramp}")

@@ -31,6 +31,10 @@ JOINT_LENGTH = 0.03175
 #: the valid domain's edges, as fractions of L (below them the mesh cannot resolve the unit)
 MIN_SPAN_FRACTION = 0.02
 MIN_SECTION_FRACTION = 1e-5  # t >= 1e-5 L (t = 1e-6 L does not converge)
+try:  # rods longer than this many thicknesses are refused by the solver
+    from solver.structure import MAX_SLENDERNESS
+except ImportError:  # pragma: no cover - an older solver
+    MAX_SLENDERNESS = 1e5
 MIN_WIDTH_FRACTION = 1e-6  # w >= 1e-6 L
 MIN_FLAT_FRACTION = 1e-4  # b + w >= 1e-4 L (the bonded flat part; 1e-5 L does not converge)
 MAX_NODES = 20001
@@ -114,6 +118,11 @@ def geometry_problem(L, h, t, w, b, E, joint_length=JOINT_LENGTH_DEFAULT, bond_l
         xs = np.linspace(b + w, L - b - w, 4001)
         zs = 0.5 * h * (1.0 - np.cos(2 * np.pi * (xs - xs[0]) / span))
         arch = float(np.sum(np.hypot(np.diff(xs), np.diff(zs))))
+        rod = arch + 2.0 * (b + w)  # the arch rod, flat ends included
+        if t < rod / MAX_SLENDERNESS * edge:
+            return (f"t (sheet thickness, {unit}) must be >= the arch rod's length / "
+                    f"{MAX_SLENDERNESS:.0e} = {q(rod / MAX_SLENDERNESS)} (valid domain: beyond "
+                    f"that slenderness double precision no longer resolves bending); got {q(t)}")
         if joint_length > 0.5 * arch:
             hint = (" (the default 1/8 in is too long for this unit: give a shorter joint_length, "
                     "or 0 for a point clamp)" if joint_length == JOINT_LENGTH_DEFAULT else "")

@@ -233,6 +233,19 @@ class _Timeout(Exception):
     """The wall-time limit passed (internal: becomes status "timeout: ...")."""
 
 
+class _DeadlineProbe(DisplacementProbe):
+    """A `DisplacementProbe` whose every solve first checks the wall-time limit (the peak and
+    zero-force searches call it many times)."""
+
+    def __init__(self, *args, deadline=None, **kw):
+        super().__init__(*args, **kw)
+        self.deadline = deadline
+
+    def solve(self, guess, d):
+        _check_deadline(self.deadline, "while locating F_cr or a zero-force state")
+        return super().solve(guess, d)
+
+
 def _rescale(r: UnitResult, g: UnitGeometry, length: float, force: float) -> UnitResult:
     """The reference-scale result ``r`` in the units of ``g``: lengths x ``length``, forces
     x ``force``, energies x force * length. Angles and counts do not change."""
@@ -322,7 +335,7 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
     def shape(pos):
         return {"arch": pos[arch].copy(), "base": pos[base].copy()}
 
-    probe = DisplacementProbe(st, model.apex, (0.0, -1.0))
+    probe = _DeadlineProbe(st, model.apex, (0.0, -1.0), deadline=deadline)
     i_pk = _first_peak(F)
     if i_pk is not None:
         result.F_cr, result.d_cr = _refine_peak(d, F, i_pk, probe, path.positions)

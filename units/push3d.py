@@ -92,15 +92,17 @@ def _probe(st, node):
         return None
 
 
-def refine_peak(probe, d, F, Q, i):
+def refine_peak(probe, d, F, Q, i, tol=2e-2):
     """F_cr, d_cr: the force maximum near path sample i by displacement-controlled solves
     (a limit point under load control is regular under displacement control); the vertex of
-    the parabola through three samples when that fails."""
+    the parabola through three samples when that fails. ``tol``: the search stops when the
+    bracket is below this fraction of the samples' spacing (F is flat at its maximum: an
+    error e in d costs ~ F'' e^2 / 2 in F_cr)."""
     if probe is not None and d[i - 1] < d[i] < d[i + 1]:
         try:
             from solver.states import refine_maximum
 
-            F_max, d_max = refine_maximum(probe, d, F, Q, i, tol_d=2e-3 * (d[i + 1] - d[i - 1]))
+            F_max, d_max = refine_maximum(probe, d, F, Q, i, tol_d=tol * (d[i + 1] - d[i - 1]))
             if F_max >= F[i]:
                 return float(F_max), float(d_max), True
         except Exception:  # noqa: BLE001

@@ -2,21 +2,25 @@
 imperfections the paper saw (issue 14), on the 3-D discrete elastic rods of `solver.Structure3D`.
 
     >>> from units.unit3d import simulate_unit_3d
-    >>> from solver.unit_model import UnitGeometry
+    >>> from units.frame3d import UnitGeometry
     >>> r = simulate_unit_3d(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3), tilt_deg=2)
     >>> r.F_cr, r.theta_deg, r.arch_tilt_deg, r.rail_twist_deg
 
 Geometry (x along the base, y across it, z up; `../shared/unit-model.md`, docs/unit3d.md):
 - the base is a frame of outer width 4w: two side rails of width w (centrelines y = ±1.5 w)
   along the whole length, and two solid end regions 0 <= x <= b + w (and mirrored) of width 4w.
-  An end region is a grid: the rails, a centre strip of width 2w (y = 0) and cross bars along y
-  at every node of the end region (each as wide, in x, as the length of plate it stands for),
-  rigidly jointed where they cross. The hollow middle is the two rails only.
+  An end region is a grid: the rails, a centre strip of width 2w (y = 0), cross bars along y
+  at every end-region node before x0 (each as wide, in x, as the length of plate it stands
+  for; each two rods running out from the centre), rigidly jointed where they cross
+  (`Mesh3D.bond`), and two crossed pairs of braces for the plate's in-plane shear stiffness.
+  The hollow middle is the two rails only. ``end_plate="stiff"``: bars 10x thicker.
 - the arch, a strip of width w on the centre line, flat on the end regions and bonded there
-  (rigid joints between coincident arch and centre-strip nodes), sinusoidal through the hole.
+  (shared positions; orientations jointed where both neighbouring edges are bonded),
+  sinusoidal through the hole.
 - rollers: z held along the line x = 0.03 L across the whole width (and mirrored);
 - actuator: the arch nodes within ``joint_length`` around the push point move as one
-  (`Structure3D.rigid`), and the push point cannot move in x or y.
+  (`Structure3D.rigid`) with a short stiff head across the arch that holds its roll, and the
+  push point cannot move in x or y.
 As in the planar unit (docs/model-notes.md, note 1), the arch leaves the base at x0 = b + w,
 the midpoint of an edge of the rails, the centre strip and the arch, so that the composite
 (bonded) region ends exactly at x0 in the DER sense.

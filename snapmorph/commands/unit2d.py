@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
             ("F_cr", _fmt(r.F_cr), "N"), ("d_cr", _fmt(r.d_cr, 1e3), "mm"),
             ("d_unstable (ii)", _fmt(r.d_unstable, 1e3), "mm"),
             ("d_second (iii)", _fmt(r.d_second, 1e3), "mm"),
-            ("nodes", str(r.n_nodes), ""), ("solve time", _fmt(r.solve_time, 1e3, 3), "ms")]
+            ("nodes", str(r.n_nodes), ""), ("solve time", _fmt(r.solve_time, 1.0, 3), "s")]
     for name, value, unit in rows:
         print(f"  {name:<20} {value:>12} {unit}")
     edges = r.edges.get("iii")

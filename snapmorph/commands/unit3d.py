@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
         rows.append((f"arch tilt ({state})", _fmt(r.arch_tilt_deg.get(state)), "deg"))
     for state in ("i", "ii", "iii"):
         rows.append((f"rail twist ({state})", _fmt(r.rail_twist_deg.get(state)), "deg"))
-    rows += [("nodes", str(r.n_nodes), ""), ("solve time", _fmt(r.solve_time, 1e3, 3), "ms")]
+    rows += [("nodes", str(r.n_nodes), ""), ("solve time", _fmt(r.solve_time, 1.0, 3), "s")]
     print(f"unit3d L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm, "
           f"tilt={args.tilt:g} deg, apex offset={args.apex_offset:g} mm, actuator offset="
           f"{args.actuator_offset:g} mm")

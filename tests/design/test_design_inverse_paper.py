@@ -86,3 +86,20 @@ def test_both_conventions_simulated_side_by_side(dm, tmp_path):
 def test_bad_convention(dm):
     with pytest.raises(ValueError, match="theta_convention must be one of"):
         inverse_design([(0, 0), (0.1, 0)], t=T, w=W, design_map=dm, theta_convention="half")
+
+
+def test_theta_end_of_a_schema_2_map(design_map):
+    """On a map that stores theta_end (the synthetic schema-2 map, released state), the paper's
+    units are found by inverting theta_end itself: theta_end equals each arc's turning."""
+    if getattr(design_map, "schema_version", 1) < 2:
+        pytest.skip("the synthetic map has no theta_end")
+    pts, ang = s_control_points(R=0.2, turn=120.0, n=4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = inverse_design(pts, t=T, w=W, tangents=ang, design_map=design_map,
+                           theta_convention="paper", min_barrier=0.0)
+    lk = MapLookup(design_map)
+    arched = [u for u in d.units if not u.is_spacer]
+    assert len(arched) == 8 and d.state == "released"
+    for u in arched:
+        assert lk.theta_end(u.h / u.L, u.t / u.L, u.w / u.L) == pytest.approx(30.0, abs=1e-6)

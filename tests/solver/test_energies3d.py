@@ -148,7 +148,7 @@ def test_bending_and_twist_fd(rng):
 def test_twist_angle_is_theta_difference_plus_reference_twist(rng):
     """psi = theta_b - theta_a + reference twist; and a pure rotation of frame b about its
     tangent by alpha changes psi by alpha."""
-    ta, tb = _unit(rng.normal(size=3)), None
+    ta = _unit(rng.normal(size=3))
     tb = _unit(ta + 0.5 * rng.normal(size=3))
     d = space_parallel_frames(np.stack([ta, tb]), rng.normal(size=3))
     d[1] = _unit(np.cross(tb, d[1]) * 0.3 + d[1])  # some reference twist

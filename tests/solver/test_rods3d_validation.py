@@ -30,7 +30,8 @@ def _compare(p3, p2, points):
     return float(np.max(np.abs(F3 - F2) / np.max(np.abs(F2))))
 
 
-def _planar_to_3d(xz, normal_in_plane=True):
+def _planar_to_3d(xz):
+    """(x, z) points to (x, 0, z)."""
     return np.stack([xz[:, 0], np.zeros(len(xz)), xz[:, 1]], 1)
 
 
@@ -159,3 +160,62 @@ def test_lateral_torsional_buckling_of_a_cantilever_strip():
     assert np.max(np.abs(path.positions[-1, -1, 1])) > 1e-3
     assert np.max(np.abs(path.twist[-1])) > 1e-2
     assert np.all(path.negative_eigenvalues[-5:] == 0)  # stable post-buckled branch
+
+
+@pytest.mark.slow
+def test_free_rod_with_natural_curvature_and_twist_relaxes_to_the_helix():
+    """A rod with natural curvature kappa (through its thickness) and natural twist tau,
+    held only against rigid motion (3-2-1 supports), relaxes from another helix (radius
+    +15 %, pitch -15 %) to radius kappa / (kappa^2 + tau^2) and pitch
+    2 pi tau / (kappa^2 + tau^2), measured from the screw motion between its edges."""
+    kap, tau = 20.0, 10.0
+    R0, P0 = kap / (kap**2 + tau**2), 2 * np.pi * tau / (kap**2 + tau**2)
+    n, length = 61, 0.3
+    R, c = 1.15 * R0, 0.85 * P0 / (2 * np.pi)
+    phi = np.linspace(0.0, length, n) / np.hypot(R, c)
+    xyz = np.stack([R * np.cos(phi), R * np.sin(phi), c * phi], 1)
+    mid = 0.5 * (phi[1:] + phi[:-1])
+    normals = np.stack([-np.cos(mid), -np.sin(mid), 0 * mid], 1)  # toward the axis
+    st = Structure3D()
+    st.add_rod(xyz, width=2e-3, thickness=1e-3, E=2e9, nu=0.4, normal=normals,
+               natural_curvature=(kap, 0.0), natural_twist=tau)
+    st.fix(0, "xyz")
+    st.fix(1, "yz")
+    st.fix(2, "z")
+    q, info = st.relax()
+    assert info["energy"] < 1e-20  # the helix is stress free
+    e = np.diff(st.positions_of(q), axis=0)
+    k = n // 3
+    axis = np.cross(e[k + 1] - e[k], e[k + 2] - e[k + 1])
+    axis /= np.linalg.norm(axis)
+    rise = e @ axis
+    perp = e - np.outer(rise, axis)
+    chord = np.linalg.norm(perp, axis=1)
+    turn = np.arccos(np.clip(np.sum(perp[1:] * perp[:-1], 1) / (chord[1:] * chord[:-1]), -1, 1))
+    radius = chord[:-1] / (2 * np.sin(turn / 2))
+    pitch = 2 * np.pi * np.abs(rise[:-1]) / turn
+    assert np.max(np.abs(radius / R0 - 1)) < 5e-3
+    assert np.max(np.abs(pitch / P0 - 1)) < 5e-3
+
+
+@pytest.mark.slow
+def test_tip_moment_bends_a_strip_into_a_ring_arc():
+    """A cantilever strip under a dead tip couple M about its width axis bends into a
+    circular arc of radius EI1 / M (here 3/8 of a ring)."""
+    n, L = 41, 0.1
+    x = np.linspace(0.0, L, n)
+    st = Structure3D()
+    st.add_rod(np.stack([x, 0 * x, 0 * x], 1), width=5e-3, thickness=0.5e-3, E=E, nu=NU,
+               normal=(0.0, 0.0, 1.0))
+    st.clamp(0, toward=1)
+    EI1 = float(st.rods[0].EI1[0])
+    M = 0.75 * np.pi * EI1 / L
+    q, info = st.relax(moments=[(n - 2, n - 1, M, (0.0, -1.0, 0.0))], ramp=3)
+    X = st.positions_of(q)
+    A = np.stack([X[:, 0], X[:, 2], np.ones(n)], 1)
+    sol = np.linalg.lstsq(A, X[:, 0] ** 2 + X[:, 2] ** 2, rcond=None)[0]
+    xc, zc = sol[0] / 2, sol[1] / 2
+    radii = np.hypot(X[:, 0] - xc, X[:, 2] - zc)
+    assert np.ptp(radii) < 1e-9 * L  # a circle
+    assert np.mean(radii) == pytest.approx(EI1 / M, rel=5e-3)
+    assert np.max(np.abs(X[:, 1])) < 1e-12  # in its plane

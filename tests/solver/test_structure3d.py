@@ -257,3 +257,17 @@ def test_bad_input_never_shows_a_numba_traceback():
     assert r.returncode != 0
     assert "ValueError: normal must be" in r.stderr
     assert "numba" not in r.stderr.lower()
+
+
+def test_joint_of_antiparallel_edges_is_refused():
+    """Two rods both starting at the joint along the same line: the edge into the joint and
+    the edge out of it would be antiparallel (a 180 degree fold): a clear error."""
+    s = np.linspace(0.0, 0.05, 5)
+    st = Structure3D()
+    r1 = st.add_rod(np.stack([s, 0 * s, 0 * s], 1), W, T, E)
+    r2 = st.add_rod(np.stack([s, 0 * s, 0 * s], 1), W, T, E)
+    with pytest.raises(ValueError, match="opposite"):
+        st.joint(r1.nodes[0], r2.nodes[0])
+    # two rods continuing one another through the joint are fine
+    r3 = st.add_rod(np.stack([-s, 0 * s, 0 * s], 1), W, T, E)
+    st.joint(r3.nodes[0], r1.nodes[0])

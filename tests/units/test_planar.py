@@ -221,6 +221,7 @@ def test_bad_geometry_values_name_the_parameter_and_unit(name, unit, value, matc
     (dict(joint_length=-1e-3), r"joint_length .* must be >= 0"),
     (dict(joint_length=0.05), r"joint_length .* must be <= half the arch's arc length"),
     (dict(t=1e-8), r"t \(sheet thickness, m\) must be >= 1e-05 L = 1e-06 m \(valid domain"),
+    (dict(t=1.05e-6), r"t \(sheet thickness, m\) must be >= the arch rod's length / "),
     (dict(w=1e-9, b=5e-3), r"w \(strip width, m\) must be >= 1e-06 L"),
     (dict(w=1e-6, b=0.0), r"b \+ w \(the flat, bonded end length\) must be >= 0.0001 L"),
     (dict(b=0.0445), r"b \+ w must be <= 0.49 L = 0.049 m \(valid domain"),
@@ -248,8 +249,16 @@ def test_bad_simulation_arguments_are_refused(kw, match):
         simulate_unit(dict(PAPER))
 
 
+def _thinnest(L, h, w, b=0.0):
+    """The smallest valid t: the arch rod's length / MAX_SLENDERNESS."""
+    from units.geometry import MAX_SLENDERNESS
+
+    g = UnitGeometry(L=L, h=h, t=1e-3, w=w, b=b)
+    return (g.arch_length + 2 * (b + w)) / MAX_SLENDERNESS * (1 + 1e-9)
+
+
 @pytest.mark.parametrize("kw", [
-    dict(L=0.1, h=0.02, t=1e-6, w=5e-3),  # t = 1e-5 L, the thin edge of the domain
+    dict(L=0.1, h=0.02, t=_thinnest(0.1, 0.02, 5e-3), w=5e-3),  # the thin edge of the domain
     dict(L=0.1, h=0.02, t=5e-4, w=1e-7, b=5e-3),  # w = 1e-6 L
     dict(L=0.1, h=0.02, t=5e-4, w=1e-5),  # b + w = 1e-4 L
     dict(L=0.1, h=0.001, t=5e-4, w=5e-3, b=0.049 - 5e-3, joint_length=0.0),  # span 0.02 L

@@ -177,3 +177,17 @@ def test_cli_unit2d(tmp_path, capsys):
                  "--json", str(tmp_path / "u.json")]) == 0
     out = capsys.readouterr().out
     assert "bistable" in out and "north" in out
+
+
+@pytest.mark.slow
+def test_2d_unit_mesh_convergence_within_one_percent():
+    """Default mesh (41 nodes per side) against 81: F_cr 1.2505 / 1.2396 N (0.9 %), theta of
+    the sides 13.79 / 13.86 deg, d_second 65.10 / 64.71 mm (measured)."""
+    _solver()
+    from units.unit2d import DEFAULT_NODES_2D, simulate_unit_2d
+
+    coarse = simulate_unit_2d(G40, nodes=DEFAULT_NODES_2D)
+    fine = simulate_unit_2d(G40, nodes=2 * DEFAULT_NODES_2D - 1)
+    assert coarse.F_cr == pytest.approx(fine.F_cr, rel=0.01)
+    assert coarse.theta_deg == pytest.approx(fine.theta_deg, rel=0.01)
+    assert coarse.d_second == pytest.approx(fine.d_second, rel=0.01)
