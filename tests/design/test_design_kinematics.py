@@ -124,3 +124,61 @@ def _lookup(dm):
     from design.lookup import MapLookup
 
     return MapLookup(dm)
+
+
+# ------------------------------------------------------------------ released vs actuated
+RELEASE_DEG = 5.0  # the test map's released units turn this much less
+
+
+@pytest.fixture(scope="module")
+def two_state_map(tmp_path_factory):
+    """The synthetic map with a released state that turns RELEASE_DEG less (circular arcs)."""
+    from maps import DesignMap
+
+    ds = sm.make_dataset()
+    th = ds["theta"].values - RELEASE_DEG
+    base = ds["base_shape_released"].values.copy()
+    for idx in np.ndindex(th.shape):
+        if np.isfinite(th[idx]):
+            base[idx] = sm.arc_shape(th[idx], sm.base_length(float(ds.h_over_L[idx[0]])))
+    ds["theta_released"].values[...] = th
+    ds["theta_end_released"].values[...] = th / 2
+    ds["S_released"].values[...] = base[..., -1, 0] / np.cos(np.radians(th) / 2)
+    ds["base_shape_released"].values[...] = base
+    path = tmp_path_factory.mktemp("two") / "two_state.nc"
+    ds.to_netcdf(path)
+    return DesignMap.load(path)
+
+
+def test_forward_kinematics_defaults_to_the_released_state(two_state_map):
+    u = unit(0.1, 0.025)
+    units = [u, u.mirrored(), u]
+    rel = chain(units, "111", lookup=_lookup(two_state_map))
+    act = chain(units, "111", lookup=_lookup(two_state_map), state="actuated")
+    theta = two_state_map.at(0.25, 0.005, 0.05, state="actuated")["theta"]
+    turns_rel = np.degrees(np.diff(rel.angles))
+    turns_act = np.degrees(np.diff(act.angles))
+    np.testing.assert_allclose(turns_act, [theta, -theta, theta], rtol=1e-9)
+    np.testing.assert_allclose(turns_rel, [theta - RELEASE_DEG, -(theta - RELEASE_DEG),
+                                           theta - RELEASE_DEG], rtol=1e-9)
+    xy = forward_kinematics(units, "111", design_map=two_state_map)
+    np.testing.assert_allclose(xy, rel.xy, atol=1e-15)
+    xy_act = forward_kinematics(units, "111", design_map=two_state_map, state="actuated")
+    np.testing.assert_allclose(xy_act, act.xy, atol=1e-15)
+    states = all_states(units, design_map=two_state_map, state="actuated")
+    np.testing.assert_allclose(states["111"], act.xy, atol=1e-15)
+    with pytest.raises(ValueError, match="state must be 'released'"):
+        forward_kinematics(units, "111", design_map=two_state_map, state="held")
+
+
+def test_lookup_state_and_theta_end(two_state_map):
+    from design.lookup import MapLookup
+
+    lk = MapLookup(two_state_map)
+    th_r, _ = lk.theta_S(0.25, 0.005, 0.05)
+    th_a, _ = lk.theta_S(0.25, 0.005, 0.05, state="actuated")
+    assert th_a - th_r == pytest.approx(RELEASE_DEG, abs=1e-9)
+    assert lk.theta_end(0.25, 0.005, 0.05) == pytest.approx(th_r / 2, abs=1e-9)
+    h = lk.h_over_L_for_theta_end(th_r / 2, 0.005, 0.05)
+    assert h == pytest.approx(0.25, abs=1e-9)
+    assert MapLookup(two_state_map, state="actuated").theta_S(0.25, 0.005, 0.05)[0] == th_a
