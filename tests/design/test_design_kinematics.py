@@ -141,10 +141,14 @@ def two_state_map(tmp_path_factory):
     for idx in np.ndindex(th.shape):
         if np.isfinite(th[idx]):
             base[idx] = sm.arc_shape(th[idx], sm.base_length(float(ds.h_over_L[idx[0]])))
-    ds["theta_released"].values[...] = th
-    ds["theta_end_released"].values[...] = th / 2
-    ds["S_released"].values[...] = base[..., -1, 0] / np.cos(np.radians(th) / 2)
-    ds["base_shape_released"].values[...] = base
+    # new arrays: the synthetic map shares its actuated arrays with the released variables
+    dims = ds["theta"].dims
+    ds["theta_released"] = (dims, th, ds["theta_released"].attrs)
+    ds["theta_end_released"] = (dims, th / 2, ds["theta_end_released"].attrs)
+    ds["S_released"] = (dims, base[..., -1, 0] / np.cos(np.radians(th) / 2),
+                        ds["S_released"].attrs)
+    ds["base_shape_released"] = (ds["base_shape_released"].dims, base,
+                                 ds["base_shape_released"].attrs)
     path = tmp_path_factory.mktemp("two") / "two_state.nc"
     ds.to_netcdf(path)
     return DesignMap.load(path)
