@@ -920,12 +920,12 @@ def _turn_runs(target: Target, hysteresis: float) -> list:
 
 
 def _initial_layout(target: Target, quantum_deg: float, lim: Limits, dm, t, w, state_kw,
-                    theta_scale: float = 1.0):
+                    theta_scale: float = 1.0, share: float = 1.0):
     """A first guess: (sides, L, h/L). The target is cut where its turning changes direction;
     each run turning Φ gets round(|Φ| / quantum) units (at least enough not to exceed θ_max, none
     when it turns less than half the smallest θ: a spacer), each covering an equal share of the
-    turning; a unit whose share of the curve is longer than L_max sits at its middle (in
-    turning) between two spacers."""
+    turning; a unit whose share of the curve is longer than L_max (or than `share` times it)
+    sits at its middle (in turning) between two spacers."""
     s, phi = target.s, target.angle
     runs = _turn_runs(target, math.radians(0.25 * lim.theta_min))
     items = []  # (side, L, hL)
@@ -949,7 +949,7 @@ def _initial_layout(target: Target, quantum_deg: float, lim: Limits, dm, t, w, s
         for k in range(n):
             a, b = cuts[k], cuts[k + 1]
             length = b - a
-            L = float(np.clip(length, lim.L_min, lim.L_max))
+            L = float(np.clip(share * length, lim.L_min, lim.L_max))
             mid_level = 0.5 * (levels[k] + levels[k + 1]) * side
             centre = float(np.interp(mid_level, np.maximum.accumulate(seg_phi), s[i0:i1 + 1]))
             left = max(0.0, min(centre - L / 2 - a, length - L))
@@ -1216,9 +1216,11 @@ def _curve_design(target: Target, t, w, dm, tol, placement, L_range, hL_range, m
     quanta = sorted({round(max(lim.theta_min, f * lim.theta_max), 6) for f in fractions}
                     | {round(lim.theta_min, 6)}, reverse=True)
     best, tried, seen = None, [], set()
-    for q in quanta:
-        sides, L, hL = _initial_layout(target, q, lim, dm, t, w, state_kw)
-        key = tuple(sides)
+    # fewest units first; for each count, units covering their whole share of the curve, then
+    # units of 60 % of it between spacers (curvature concentrated, as a unit's is)
+    for q, share in ((q, s) for q in quanta for s in (1.0, 0.6)):
+        sides, L, hL = _initial_layout(target, q, lim, dm, t, w, state_kw, share=share)
+        key = (tuple(sides), share if any(s == 0 for s in sides) else 1.0)
         if key in seen:
             continue
         seen.add(key)
@@ -1259,10 +1261,16 @@ def _curve_design(target: Target, t, w, dm, tol, placement, L_range, hL_range, m
         except ValueError as exc:
             tried.append((q, len(sides), str(exc)))
             continue
-        rr0 = np.hypot(*r0.reshape(-1, 2).T)
-        d.refinement = {"max_before": float(rr0.max()), "rms_before": float(np.sqrt(np.mean(rr0 ** 2))),
+        # the initial layout's deviation, as placed on the target's start and tangent
+        try:
+            units0 = _units_from(sides, L, hL, t, w, b_over_L)
+            before = deviation(_chain_fast(units0, dm, state_kw, tuple(target.start),
+                                           target.start_angle).xy, target.xy)
+        except ValueError:
+            before = (math.inf, math.inf)
+        d.refinement = {"max_before": before[0], "rms_before": before[1],
                         "max_after": d.max_deviation, "rms_after": d.rms_deviation,
-                        "nfev": nfev, "accepted": True, "quantum_deg": q}
+                        "nfev": nfev, "accepted": True, "quantum_deg": q, "share": share}
         tried.append((q, len(sides), d.max_deviation))
         if best is None or d.max_deviation < best.max_deviation:
             best = d

@@ -21,8 +21,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from solver.energies3d import bending_terms, chain_pair, pair_frames, stretch_terms, twist_terms
-from solver.frames3d import material_frame_jet
+from solver.energies3d import pair_edge_scratch, pair_terms_edges, stretch_terms
+from solver.frames3d import frame_jet_scratch, material_frame_jet_ws
 
 
 def element_dofs3d(n_nodes, edge_nodes, n_edges, pair_edges, dof_map):
@@ -50,6 +50,7 @@ def frame_jets(q, n_nodes, edge_nodes, src_t, src_d, vals, jacs, hesss):
     """Material frames [t, m1, m2] of every edge and clamp frame with their derivatives
     w.r.t. (edge vector, twist) (see `solver.frames3d.material_frame_jet`)."""
     e = np.empty(3)
+    ws = frame_jet_scratch()
     for j in range(edge_nodes.shape[0]):
         a = edge_nodes[j, 0]
         b = edge_nodes[j, 1]
@@ -67,7 +68,8 @@ def frame_jets(q, n_nodes, edge_nodes, src_t, src_d, vals, jacs, hesss):
             continue
         for k in range(3):
             e[k] = q[3 * b + k] - q[3 * a + k]
-        material_frame_jet(e, q[3 * n_nodes + j], src_t[j], src_d[j], vals[j], jacs[j], hesss[j])
+        material_frame_jet_ws(e, q[3 * n_nodes + j], src_t[j], src_d[j], vals[j], jacs[j],
+                              hesss[j], ws)
 
 
 @njit(cache=True)
@@ -96,6 +98,30 @@ _PAIR_SIGN = np.array([-1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0,
 
 
 @njit(cache=True)
+def _scatter_pair(full, red, g8, h8, dof_scale, band, grad_red, grad_full):
+    """Scatter a pair's gradient and Hessian in p = (e_a, theta_a, e_b, theta_b) straight
+    into the full gradient, the reduced gradient and the band: local coordinate a of the 14
+    (start xyz, end xyz, twist per frame) reads p[_PAIR_P[a]] with sign _PAIR_SIGN[a]."""
+    for a in range(14):
+        fa = full[a]
+        if fa < 0:
+            continue
+        pa = _PAIR_P[a]
+        ga = _PAIR_SIGN[a] * g8[pa]
+        grad_full[fa] += ga
+        ra = red[a]
+        if ra < 0:
+            continue
+        ca = dof_scale[fa] * _PAIR_SIGN[a]
+        grad_red[ra] += dof_scale[fa] * ga
+        for b in range(14):
+            rb = red[b]
+            if rb < 0 or rb > ra:
+                continue
+            band[ra - rb, rb] += ca * dof_scale[full[b]] * _PAIR_SIGN[b] * h8[pa, _PAIR_P[b]]
+
+
+@njit(cache=True)
 def assemble_system3d(q, n_nodes, edge_nodes, src_t, src_d, stretch_params, pair_edges,
                       pair_signs, pair_params, stretch_full, stretch_red, pair_full, pair_red,
                       dof_scale, band, grad_red, grad_full):
@@ -103,7 +129,8 @@ def assemble_system3d(q, n_nodes, edge_nodes, src_t, src_d, stretch_params, pair
 
     ``dof_scale`` (full,): dq_full = dof_scale * du_reduced (1 for positions, 1 / length for
     twists, so that reduced twist DOFs are lengths and the path followers' norms and
-    tolerances weigh them like displacements)."""
+    tolerances weigh them like displacements). Scratch is allocated once per call; the
+    element loops allocate nothing."""
     band[:, :] = 0.0
     grad_red[:] = 0.0
     grad_full[:] = 0.0
@@ -121,35 +148,17 @@ def assemble_system3d(q, n_nodes, edge_nodes, src_t, src_d, stretch_params, pair
             x6[k] = q[stretch_full[j, k]]
         energy += stretch_terms(x6, stretch_params[j, 0], stretch_params[j, 1], g6, h6)
         _scatter(stretch_full[j], stretch_red[j], 6, g6, h6, dof_scale, band, grad_red, grad_full)
-    z = np.empty(18)
-    gb = np.empty(18)
-    hb = np.empty((18, 18))
-    gt = np.empty(18)
-    ht = np.empty((18, 18))
     g8 = np.empty(8)
     h8 = np.empty((8, 8))
-    g14 = np.empty(14)
-    h14 = np.empty((14, 14))
+    ws = pair_edge_scratch()
     for p in range(pair_edges.shape[0]):
         ea = pair_edges[p, 0]
         eb = pair_edges[p, 1]
-        sa = pair_signs[p, 0]
-        sb = pair_signs[p, 1]
-        pp = pair_params[p]
-        pair_frames(vals[ea], sa, vals[eb], sb, z)
-        energy += bending_terms(z, pp[0], pp[1], pp[3], pp[4], gb, hb)
-        energy += twist_terms(z, pp[2], pp[5], gt, ht)
-        for i in range(18):
-            gb[i] += gt[i]
-            for k in range(18):
-                hb[i, k] += ht[i, k]
-        chain_pair(gb, hb, jacs[ea], hesss[ea], sa, jacs[eb], hesss[eb], sb, g8, h8)
-        for a in range(14):
-            pa = _PAIR_P[a]
-            g14[a] = _PAIR_SIGN[a] * g8[pa]
-            for b in range(14):
-                h14[a, b] = _PAIR_SIGN[a] * _PAIR_SIGN[b] * h8[pa, _PAIR_P[b]]
-        _scatter(pair_full[p], pair_red[p], 14, g14, h14, dof_scale, band, grad_red, grad_full)
+        energy += pair_terms_edges(vals[ea], jacs[ea], hesss[ea], pair_signs[p, 0], vals[eb],
+                                   jacs[eb], hesss[eb], pair_signs[p, 1], pair_params[p, 0],
+                                   pair_params[p, 1], pair_params[p, 2], pair_params[p, 3],
+                                   pair_params[p, 4], pair_params[p, 5], g8, h8, ws)
+        _scatter_pair(pair_full[p], pair_red[p], g8, h8, dof_scale, band, grad_red, grad_full)
     return energy
 
 

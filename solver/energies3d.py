@@ -118,19 +118,39 @@ def _quotient(num, gn, hn, den, gd, hd, grad, hess):
 # z offsets of t_a, t_b and the two directors summed into u, per curvature (kappa1: m2,
 # kappa2: m1 with a minus sign)
 _CURV_U = np.array([[6, 15], [3, 12]], dtype=np.int64)
+# z offset of each 3-block a curvature reads (t_a, t_b, the two directors summed into u) and
+# its y offset, per curvature
+_CURV_OZ = np.array([[0, 9, 6, 15], [0, 9, 3, 12]], dtype=np.int64)
+_CURV_OY = np.array([0, 3, 6, 6], dtype=np.int64)
+
+
+@njit(cache=True)
+def pair_scratch():
+    """Scratch arrays of the allocation-free pair kernels (`pair_terms`, `chain_pair_ws`):
+    allocate once, reuse for every pair."""
+    return (np.empty(9), np.empty(9), np.empty((9, 9)), np.empty(9), np.empty((9, 9)),
+            np.empty(9), np.empty((9, 9)), np.empty(18), np.empty((18, 18)), np.empty(18),
+            np.empty((18, 18)), np.empty(18), np.empty((18, 8)), np.empty((18, 8)))
+
+
+@njit(cache=True)
+def _curvature9_ws(y, g9, h9, gn, hn, gd, hd):
+    """f = u . (t_a x t_b) / (1 + t_a . t_b) of y = [t_a, t_b, u] (9,); writes its
+    gradient (9,) and Hessian (9, 9); gn, hn, gd, hd: (9,), (9, 9) scratch."""
+    gn[:] = 0.0
+    hn[:, :] = 0.0
+    gd[:] = 0.0
+    hd[:, :] = 0.0
+    num = _triple(y, 6, 0, 3, 1.0, gn, hn)
+    den = 1.0 + _dot(y, 0, 3, gd, hd)
+    return _quotient(num, gn, hn, den, gd, hd, g9, h9)
 
 
 @njit(cache=True)
 def _curvature9(y, g9, h9):
-    """f = u . (t_a x t_b) / (1 + t_a . t_b) of y = [t_a, t_b, u] (9,); writes its
-    gradient (9,) and Hessian (9, 9)."""
-    gn = np.zeros(9)
-    hn = np.zeros((9, 9))
-    num = _triple(y, 6, 0, 3, 1.0, gn, hn)
-    gd = np.zeros(9)
-    hd = np.zeros((9, 9))
-    den = 1.0 + _dot(y, 0, 3, gd, hd)
-    return _quotient(num, gn, hn, den, gd, hd, g9, h9)
+    """`_curvature9_ws` with its own scratch."""
+    return _curvature9_ws(y, g9, h9, np.empty(9), np.empty((9, 9)), np.empty(9),
+                          np.empty((9, 9)))
 
 
 @njit(cache=True)
@@ -172,20 +192,10 @@ def material_curvature(z, which, grad, hess):
 
 
 @njit(cache=True)
-def bending_terms(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess):
-    """Bending energy (J) of a frame pair ``z`` (18,) with stiffnesses k1, k2 = EI / l_bar
-    (N m) and natural integrated curvatures; writes grad (18,) and hess (18, 18).
-
-    Each curvature depends on 9 numbers (t_a, t_b and the sum of two directors): its
-    derivatives are taken in those and scattered to the four 3-blocks of z it reads."""
-    grad[:] = 0.0
-    hess[:, :] = 0.0
-    y = np.empty(9)
-    g9 = np.empty(9)
-    h9 = np.empty((9, 9))
-    oz = np.empty(4, dtype=np.int64)  # z offset of each 3-block
-    oy = np.array([0, 3, 6, 6])  # y offset of each 3-block
-    sb = np.empty(4)
+def bending_add(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess, ws):
+    """Add the bending energy's gradient and Hessian of `bending_terms` to ``grad`` (18,),
+    ``hess`` (18, 18); returns the energy (J). ``ws``: `pair_scratch` (no allocation)."""
+    y, g9, h9, gn, hn, gd, hd = ws[0], ws[1], ws[2], ws[3], ws[4], ws[5], ws[6]
     energy = 0.0
     for which in range(1, 3):
         ua = _CURV_U[which - 1, 0]
@@ -195,27 +205,20 @@ def bending_terms(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess):
             y[k] = z[k]
             y[3 + k] = z[9 + k]
             y[6 + k] = sgn * (z[ua + k] + z[ub + k])
-        oz[0] = 0
-        oz[1] = 9
-        oz[2] = ua
-        oz[3] = ub
-        sb[0] = 1.0
-        sb[1] = 1.0
-        sb[2] = sgn
-        sb[3] = sgn
-        kappa = _curvature9(y, g9, h9)
+        kappa = _curvature9_ws(y, g9, h9, gn, hn, gd, hd)
         kk = k1 if which == 1 else k2
         dk = kappa - (kappa1_bar if which == 1 else kappa2_bar)
         energy += 0.5 * kk * dk * dk
         for A in range(4):
-            za = oz[A]
-            ya = oy[A]
+            za = _CURV_OZ[which - 1, A]
+            ya = _CURV_OY[A]
+            sa = 1.0 if A < 2 else sgn
             for i in range(3):
-                grad[za + i] += kk * dk * sb[A] * g9[ya + i]
+                grad[za + i] += kk * dk * sa * g9[ya + i]
             for B in range(4):
-                zb = oz[B]
-                yb = oy[B]
-                s_ab = kk * sb[A] * sb[B]
+                zb = _CURV_OZ[which - 1, B]
+                yb = _CURV_OY[B]
+                s_ab = kk * sa * (1.0 if B < 2 else sgn)
                 for i in range(3):
                     gi = g9[ya + i]
                     for j in range(3):
@@ -224,14 +227,38 @@ def bending_terms(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess):
 
 
 @njit(cache=True)
-def twist_angle(z, grad, hess):
-    """Twist psi (rad) from frame a to frame b of ``z`` (18,); writes grad and hess."""
-    gx = np.zeros(18)
-    hx = np.zeros((18, 18))
-    gy = np.zeros(18)
-    hy = np.zeros((18, 18))
+def bending_terms(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess):
+    """Bending energy (J) of a frame pair ``z`` (18,) with stiffnesses k1, k2 = EI / l_bar
+    (N m) and natural integrated curvatures; writes grad (18,) and hess (18, 18).
+
+    Each curvature depends on 9 numbers (t_a, t_b and the sum of two directors): its
+    derivatives are taken in those and scattered to the four 3-blocks of z it reads."""
+    grad[:] = 0.0
+    hess[:, :] = 0.0
+    return bending_add(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess, pair_scratch())
+
+
+@njit(cache=True)
+def _twist_parts(z, gx, hx, gy, hy):
+    """X = 1 + tr Q and Y = (sum_k a_k x b_k) . t_a of ``z`` with their gradients and
+    Hessians (written into the scratch gx, hx, gy, hy); returns (X, Y)."""
+    gx[:] = 0.0
+    hx[:, :] = 0.0
+    gy[:] = 0.0
+    hy[:, :] = 0.0
     X = 1.0 + _dot(z, 0, 9, gx, hx) + _dot(z, 3, 12, gx, hx) + _dot(z, 6, 15, gx, hx)
     Y = _triple(z, 0, 3, 12, 1.0, gy, hy) + _triple(z, 0, 6, 15, 1.0, gy, hy)
+    return X, Y
+
+
+@njit(cache=True)
+def twist_angle(z, grad, hess):
+    """Twist psi (rad) from frame a to frame b of ``z`` (18,); writes grad and hess."""
+    gx = np.empty(18)
+    hx = np.empty((18, 18))
+    gy = np.empty(18)
+    hy = np.empty((18, 18))
+    X, Y = _twist_parts(z, gx, hx, gy, hy)
     r2 = X * X + Y * Y
     psi = 2.0 * np.arctan2(Y, X)
     N = np.empty(18)
@@ -246,18 +273,47 @@ def twist_angle(z, grad, hess):
 
 
 @njit(cache=True)
+def twist_add(z, kt, psi_bar, grad, hess, ws):
+    """Add the twisting energy's gradient and Hessian of `twist_terms` to ``grad`` (18,),
+    ``hess`` (18, 18); returns the energy (J). ``ws``: `pair_scratch` (no allocation).
+    The Hessian of psi is formed entry by entry inside kt (g g^T + (psi - psi_bar) H)."""
+    gx, hx, gy, hy, g = ws[7], ws[8], ws[9], ws[10], ws[11]
+    X, Y = _twist_parts(z, gx, hx, gy, hy)
+    r2 = X * X + Y * Y
+    inv_r2 = 1.0 / r2
+    psi = 2.0 * np.arctan2(Y, X)
+    d = psi - psi_bar
+    kd = kt * d
+    for i in range(18):
+        g[i] = 2.0 * (X * gy[i] - Y * gx[i]) * inv_r2
+        grad[i] += kd * g[i]
+    for i in range(18):
+        # 4 N_i / r2^2 = 2 g_i / r2
+        c_i = 2.0 * g[i] * inv_r2
+        for j in range(18):
+            h = (2.0 * (X * hy[i, j] - Y * hx[i, j] + gx[j] * gy[i] - gy[j] * gx[i]) * inv_r2
+                 - c_i * (X * gx[j] + Y * gy[j]))
+            hess[i, j] += kt * (g[i] * g[j] + d * h)
+    return 0.5 * kt * d * d
+
+
+@njit(cache=True)
 def twist_terms(z, kt, psi_bar, grad, hess):
     """Twisting energy (J) of a frame pair ``z`` with stiffness kt = GJ / l_bar (N m) and
     natural twist psi_bar (rad); writes grad (18,) and hess (18, 18)."""
-    g = np.empty(18)
-    h = np.empty((18, 18))
-    psi = twist_angle(z, g, h)
-    d = psi - psi_bar
-    for i in range(18):
-        grad[i] = kt * d * g[i]
-        for j in range(18):
-            hess[i, j] = kt * (g[i] * g[j] + d * h[i, j])
-    return 0.5 * kt * d * d
+    grad[:] = 0.0
+    hess[:, :] = 0.0
+    return twist_add(z, kt, psi_bar, grad, hess, pair_scratch())
+
+
+@njit(cache=True)
+def pair_terms(z, k1, k2, kt, kappa1_bar, kappa2_bar, psi_bar, grad, hess, ws):
+    """Bending plus twisting energy (J) of a frame pair ``z`` (18,): `bending_terms` +
+    `twist_terms` in one pass; writes grad (18,), hess (18, 18). ``ws``: `pair_scratch`."""
+    grad[:] = 0.0
+    hess[:, :] = 0.0
+    energy = bending_add(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess, ws)
+    return energy + twist_add(z, kt, psi_bar, grad, hess, ws)
 
 
 @njit(cache=True)
@@ -278,14 +334,21 @@ def chain_pair(gz, hz, jac_a, hess_a, sign_a, jac_b, hess_b, sign_b, g8, h8):
     """Carry a gradient (18,) and Hessian (18, 18) w.r.t. z to p = (e_a, theta_a, e_b,
     theta_b) (8,) through the frames' derivatives (`material_frame_jet`):
     g8 = J^T gz, h8 = J^T hz J + sum_c gz_c d2 z_c / dp2 (J block diagonal, 9 x 4 blocks)."""
-    J = np.zeros((18, 8))
+    ws = pair_scratch()
+    chain_pair_ws(gz, hz, jac_a, hess_a, sign_a, jac_b, hess_b, sign_b, g8, h8, ws)
+
+
+@njit(cache=True)
+def chain_pair_ws(gz, hz, jac_a, hess_a, sign_a, jac_b, hess_b, sign_b, g8, h8, ws):
+    """`chain_pair` with the scratch ``ws`` of `pair_scratch` (no allocation). Only J's two
+    diagonal 9 x 4 blocks are written and read."""
+    J, HJ = ws[12], ws[13]
     for c in range(9):
         f = sign_a if (c < 3 or c >= 6) else 1.0
         fb = sign_b if (c < 3 or c >= 6) else 1.0
         for r in range(4):
             J[c, r] = f * jac_a[c, r]
             J[9 + c, 4 + r] = fb * jac_b[c, r]
-    HJ = np.zeros((18, 8))
     for i in range(18):
         for r in range(8):
             blk = 0 if r < 4 else 9
@@ -314,6 +377,214 @@ def chain_pair(gz, hz, jac_a, hess_a, sign_a, jac_b, hess_b, sign_b, g8, h8):
             for s in range(4):
                 h8[r, s] += ga * hess_a[c, r, s]
                 h8[4 + r, 4 + s] += gb * hess_b[c, r, s]
+
+
+# ---------------------------------------------------------------------------------------
+# The pair energy straight in edge coordinates p = (e_a, theta_a, e_b, theta_b): every
+# curvature and the twist are sums of dot and triple products of the six frame vectors
+# [t_a, m1_a, m2_a, t_b, m1_b, m2_b] (blocks 0..5 of z), so J^T (d2 f / dz2) J is formed
+# block by block from the frames' 3 x 4 Jacobians and never as an 18 x 18 matrix.
+
+
+@njit(cache=True)
+def pair_edge_scratch():
+    """Scratch arrays of `pair_terms_edges` (allocate once, reuse for every pair)."""
+    return (np.empty(18), np.empty((18, 4)), np.empty((18, 4, 4)), np.empty(18),
+            np.empty((8, 8)), np.empty(18), np.empty((8, 8)), np.empty(18), np.empty((8, 8)),
+            np.empty(18), np.empty((8, 8)), np.empty(18), np.empty(8), np.empty(8),
+            np.empty(8), np.empty(18), np.empty((4, 3)))
+
+
+@njit(cache=True)
+def _jt(Jz, v, out):
+    """out (8,) = J^T v for v (18,) w.r.t. z (block c reads edge c // 3)."""
+    for r in range(8):
+        out[r] = 0.0
+    for c in range(6):
+        o = 4 * (c // 3)
+        for r in range(4):
+            acc = 0.0
+            for i in range(3):
+                acc += Jz[3 * c + i, r] * v[3 * c + i]
+            out[o + r] += acc
+    return out
+
+
+@njit(cache=True)
+def _add_dot_p(z, Jz, A, B, coef, gz, S):
+    """Add coef * z_A . z_B (blocks A != B): its z-gradient to gz (18,) and
+    J^T (its z-Hessian) J to S (8, 8); returns coef * the value."""
+    pa = 3 * A
+    pb = 3 * B
+    oa = 4 * (A // 3)
+    ob = 4 * (B // 3)
+    val = 0.0
+    for i in range(3):
+        val += z[pa + i] * z[pb + i]
+        gz[pa + i] += coef * z[pb + i]
+        gz[pb + i] += coef * z[pa + i]
+    for r in range(4):
+        for s in range(4):
+            acc = 0.0
+            for i in range(3):
+                acc += Jz[pa + i, r] * Jz[pb + i, s]
+            acc *= coef
+            S[oa + r, ob + s] += acc
+            S[ob + s, oa + r] += acc
+    return coef * val
+
+
+@njit(cache=True)
+def _add_cross_pair_p(Jz, P, Q, v, coef, S, W):
+    """Add coef * J_P^T [d2 (z_P . (z_Q x v)) / dz_P dz_Q] J_Q and its transpose to S:
+    entry (r, s) = J_P[:, r] . (J_Q[:, s] x v). ``W`` (4, 3) scratch."""
+    pp = 3 * P
+    pq = 3 * Q
+    op = 4 * (P // 3)
+    oq = 4 * (Q // 3)
+    for s in range(4):
+        W[s, 0] = Jz[pq + 1, s] * v[2] - Jz[pq + 2, s] * v[1]
+        W[s, 1] = Jz[pq + 2, s] * v[0] - Jz[pq + 0, s] * v[2]
+        W[s, 2] = Jz[pq + 0, s] * v[1] - Jz[pq + 1, s] * v[0]
+    for r in range(4):
+        for s in range(4):
+            acc = coef * (Jz[pp, r] * W[s, 0] + Jz[pp + 1, r] * W[s, 1]
+                          + Jz[pp + 2, r] * W[s, 2])
+            S[op + r, oq + s] += acc
+            S[oq + s, op + r] += acc
+
+
+@njit(cache=True)
+def _add_triple_p(z, Jz, P, Q, R, coef, gz, S, v, W):
+    """Add coef * z_P . (z_Q x z_R) (distinct blocks): z-gradient to gz, J^T H J to S;
+    returns coef * the value. ``v`` (18,) and ``W`` (4, 3) scratch."""
+    pp = 3 * P
+    pq = 3 * Q
+    pr = 3 * R
+    # cross products of the three vectors, in the scratch v: q x r, r x p, p x q
+    for k in range(3):
+        k1 = (k + 1) % 3
+        k2 = (k + 2) % 3
+        v[k] = z[pq + k1] * z[pr + k2] - z[pq + k2] * z[pr + k1]
+        v[3 + k] = z[pr + k1] * z[pp + k2] - z[pr + k2] * z[pp + k1]
+        v[6 + k] = z[pp + k1] * z[pq + k2] - z[pp + k2] * z[pq + k1]
+    val = z[pp] * v[0] + z[pp + 1] * v[1] + z[pp + 2] * v[2]
+    for k in range(3):
+        gz[pp + k] += coef * v[k]
+        gz[pq + k] += coef * v[3 + k]
+        gz[pr + k] += coef * v[6 + k]
+    # p . (q x r): d2/dp dq -> J_P^T [ . (J_Q x r)], d2/dq dr -> J_Q^T [ . (J_R x p)],
+    # d2/dr dp -> J_R^T [ . (J_P x q)] (cyclic)
+    for k in range(3):
+        v[9 + k] = z[pr + k]
+        v[12 + k] = z[pp + k]
+        v[15 + k] = z[pq + k]
+    _add_cross_pair_p(Jz, P, Q, v[9:12], coef, S, W)
+    _add_cross_pair_p(Jz, Q, R, v[12:15], coef, S, W)
+    _add_cross_pair_p(Jz, R, P, v[15:18], coef, S, W)
+    return coef * val
+
+
+@njit(cache=True)
+def pair_terms_edges(val_a, jac_a, hess_a, sign_a, val_b, jac_b, hess_b, sign_b,
+                     k1, k2, kt, kappa1_bar, kappa2_bar, psi_bar, g8, h8, ws):
+    """Bending plus twisting energy (J) of a pair of edges with its gradient ``g8`` (8,) and
+    Hessian ``h8`` (8, 8) w.r.t. p = (e_a, theta_a, e_b, theta_b), from the two frames'
+    jets (`material_frame_jet`; sign -1: the edge enters against its direction). The same
+    energy as `bending_terms` + `twist_terms` carried by `chain_pair`, without any 18 x 18
+    matrix and without allocation (``ws``: `pair_edge_scratch`)."""
+    z, Jz, Hz, gN, SN, gD, SD, gX, SX, gY, SY, G, gp, dp, bp, v, W = ws
+    # signed frame vectors and their derivatives: z = [t_a, m1_a, m2_a, t_b, m1_b, m2_b]
+    for c in range(9):
+        fa = sign_a if (c < 3 or c >= 6) else 1.0
+        fb = sign_b if (c < 3 or c >= 6) else 1.0
+        z[c] = fa * val_a[c]
+        z[9 + c] = fb * val_b[c]
+        for r in range(4):
+            Jz[c, r] = fa * jac_a[c, r]
+            Jz[9 + c, r] = fb * jac_b[c, r]
+            for s in range(4):
+                Hz[c, r, s] = fa * hess_a[c, r, s]
+                Hz[9 + c, r, s] = fb * hess_b[c, r, s]
+    for i in range(18):
+        G[i] = 0.0
+        gD[i] = 0.0
+        gX[i] = 0.0
+        gY[i] = 0.0
+    for r in range(8):
+        g8[r] = 0.0
+        for s in range(8):
+            h8[r, s] = 0.0
+            SD[r, s] = 0.0
+            SX[r, s] = 0.0
+            SY[r, s] = 0.0
+    energy = 0.0
+    # bending: kappa = N / D, D = 1 + t_a . t_b, N = +-(director sum) . (t_a x t_b)
+    D = 1.0 + _add_dot_p(z, Jz, 0, 3, 1.0, gD, SD)
+    _jt(Jz, gD, dp)
+    for which in range(2):
+        for i in range(18):
+            gN[i] = 0.0
+        for r in range(8):
+            for s in range(8):
+                SN[r, s] = 0.0
+        if which == 0:  # kappa1 = 1/2 (m2_a + m2_b) . kb
+            N = (_add_triple_p(z, Jz, 2, 0, 3, 1.0, gN, SN, v, W)
+                 + _add_triple_p(z, Jz, 5, 0, 3, 1.0, gN, SN, v, W))
+            kk = k1
+            kbar = kappa1_bar
+        else:  # kappa2 = -1/2 (m1_a + m1_b) . kb
+            N = (_add_triple_p(z, Jz, 1, 0, 3, -1.0, gN, SN, v, W)
+                 + _add_triple_p(z, Jz, 4, 0, 3, -1.0, gN, SN, v, W))
+            kk = k2
+            kbar = kappa2_bar
+        f = N / D
+        dk = f - kbar
+        energy += 0.5 * kk * dk * dk
+        for i in range(18):
+            gN[i] = (gN[i] - f * gD[i]) / D  # now d kappa / dz
+            G[i] += kk * dk * gN[i]
+        _jt(Jz, gN, gp)
+        c = kk * dk / D
+        for r in range(8):
+            g8[r] += kk * dk * gp[r]
+            for s in range(8):
+                h8[r, s] += (kk * gp[r] * gp[s]
+                             + c * (SN[r, s] - f * SD[r, s] - gp[r] * dp[s] - dp[r] * gp[s]))
+    # twisting: psi = 2 atan2(Y, X), X = 1 + tr Q, Y = (sum_k a_k x b_k) . t_a
+    X = (1.0 + _add_dot_p(z, Jz, 0, 3, 1.0, gX, SX) + _add_dot_p(z, Jz, 1, 4, 1.0, gX, SX)
+         + _add_dot_p(z, Jz, 2, 5, 1.0, gX, SX))
+    Y = (_add_triple_p(z, Jz, 0, 1, 4, 1.0, gY, SY, v, W)
+         + _add_triple_p(z, Jz, 0, 2, 5, 1.0, gY, SY, v, W))
+    r2 = X * X + Y * Y
+    psi = 2.0 * np.arctan2(Y, X)
+    d = psi - psi_bar
+    energy += 0.5 * kt * d * d
+    _jt(Jz, gX, dp)  # a = J^T dX/dz
+    _jt(Jz, gY, bp)  # b = J^T dY/dz
+    for i in range(18):
+        G[i] += kt * d * 2.0 * (X * gY[i] - Y * gX[i]) / r2
+    c2 = 2.0 / r2
+    c4 = 2.0 / (r2 * r2)
+    sym = Y * Y - X * X
+    cross = 2.0 * X * Y
+    for r in range(8):
+        gp[r] = c2 * (X * bp[r] - Y * dp[r])
+        g8[r] += kt * d * gp[r]
+    for r in range(8):
+        for s in range(8):
+            hpsi = (c2 * (X * SY[r, s] - Y * SX[r, s])
+                    + c4 * (sym * (dp[r] * bp[s] + bp[r] * dp[s])
+                            + cross * (dp[r] * dp[s] - bp[r] * bp[s])))
+            h8[r, s] += kt * (gp[r] * gp[s] + d * hpsi)
+    # the frames' own curvature: sum_c (dE/dz_c) d2 z_c / dp2
+    for c in range(18):
+        o = 0 if c < 9 else 4
+        Gc = G[c]
+        for r in range(4):
+            for s in range(4):
+                h8[o + r, o + s] += Gc * Hz[c, r, s]
+    return energy
 
 
 @njit(cache=True)

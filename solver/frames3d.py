@@ -100,6 +100,15 @@ def material_directors(directors, tangents, theta):
 
 
 @njit(cache=True)
+def frame_jet_scratch():
+    """Scratch arrays of `material_frame_jet_ws` (allocate once, reuse for every edge)."""
+    return (np.empty(3), np.empty((3, 3)), np.empty((3, 3, 3)), np.empty(3), np.empty((3, 3)),
+            np.empty(3), np.empty(3), np.empty((3, 3)), np.empty((3, 3, 3)), np.empty((3, 3)),
+            np.empty((3, 3, 3)), np.empty((3, 3, 3)), np.empty(3), np.empty((3, 3)),
+            np.empty((3, 3, 3)))
+
+
+@njit(cache=True)
 def material_frame_jet(e, theta, t_src, d_src, val, jac, hess):
     """Material frame of one edge and its derivatives w.r.t. p = (e_x, e_y, e_z, theta).
 
@@ -108,14 +117,19 @@ def material_frame_jet(e, theta, t_src, d_src, val, jac, hess):
     d(t) = P(t_src -> t) d_src with t = e / |e|. Writes ``val`` (9,) = [t, m1, m2],
     ``jac`` (9, 4) = d val / dp (1/m for e, 1/rad for theta) and ``hess`` (9, 4, 4).
     """
+    material_frame_jet_ws(e, theta, t_src, d_src, val, jac, hess, frame_jet_scratch())
+
+
+@njit(cache=True)
+def material_frame_jet_ws(e, theta, t_src, d_src, val, jac, hess, ws):
+    """`material_frame_jet` writing its intermediates into ``ws`` (from
+    `frame_jet_scratch`): no allocation, for the assembly loop."""
+    t, T1, T2, w, W, u, d, D1, D2, dE, DT, dEE, b, bE, bEE = ws
     ell = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
     inv = 1.0 / ell
-    t = np.empty(3)
     for k in range(3):
         t[k] = e[k] * inv
     # dt/de and d2t/de2
-    T1 = np.empty((3, 3))
-    T2 = np.empty((3, 3, 3))
     for k in range(3):
         for i in range(3):
             T1[k, i] = ((1.0 if k == i else 0.0) - t[k] * t[i]) * inv
@@ -129,13 +143,11 @@ def material_frame_jet(e, theta, t_src, d_src, val, jac, hess):
     # d(t) = c d_src + w x d_src + w (w . d_src) / (1 + c), c = t_src . t, w = t_src x t;
     # c and w are linear in t, so all its derivatives w.r.t. the vector t are closed form.
     c = t_src[0] * t[0] + t_src[1] * t[1] + t_src[2] * t[2]
-    w = np.empty(3)
     w[0] = t_src[1] * t[2] - t_src[2] * t[1]
     w[1] = t_src[2] * t[0] - t_src[0] * t[2]
     w[2] = t_src[0] * t[1] - t_src[1] * t[0]
     s = w[0] * d_src[0] + w[1] * d_src[1] + w[2] * d_src[2]
     A = 1.0 / (1.0 + c)
-    W = np.empty((3, 3))  # W[j] = dw/dt_j = t_src x E_j
     W[0, 0] = 0.0
     W[0, 1] = t_src[2]
     W[0, 2] = -t_src[1]
@@ -145,14 +157,11 @@ def material_frame_jet(e, theta, t_src, d_src, val, jac, hess):
     W[2, 0] = t_src[1]
     W[2, 1] = -t_src[0]
     W[2, 2] = 0.0
-    u = np.empty(3)  # u_j = W_j . d_src = (d_src x t_src)_j
     for j in range(3):
         u[j] = W[j, 0] * d_src[0] + W[j, 1] * d_src[1] + W[j, 2] * d_src[2]
-    d = np.empty(3)
     d[0] = c * d_src[0] + (w[1] * d_src[2] - w[2] * d_src[1]) + w[0] * s * A
     d[1] = c * d_src[1] + (w[2] * d_src[0] - w[0] * d_src[2]) + w[1] * s * A
     d[2] = c * d_src[2] + (w[0] * d_src[1] - w[1] * d_src[0]) + w[2] * s * A
-    D1 = np.empty((3, 3))  # dd_k / dt_j
     for j in range(3):
         # W_j x d_src
         cx0 = W[j, 1] * d_src[2] - W[j, 2] * d_src[1]
@@ -162,7 +171,6 @@ def material_frame_jet(e, theta, t_src, d_src, val, jac, hess):
             cxk = cx0 if k == 0 else (cx1 if k == 1 else cx2)
             D1[k, j] = (t_src[j] * d_src[k] + cxk + W[j, k] * s * A + w[k] * u[j] * A
                         - w[k] * s * A * A * t_src[j])
-    D2 = np.empty((3, 3, 3))  # d2 d_k / dt_i dt_j
     A2 = A * A
     for k in range(3):
         for i in range(3):
@@ -172,14 +180,12 @@ def material_frame_jet(e, theta, t_src, d_src, val, jac, hess):
                                - A2 * w[k] * (u[j] * t_src[i] + u[i] * t_src[j])
                                + 2.0 * A2 * A * w[k] * s * t_src[i] * t_src[j])
     # chain to the edge vector: dd/de = D1 T1, d2d/de2 = D1 T2 + T1^T D2 T1
-    dE = np.zeros((3, 3))
     for k in range(3):
         for i in range(3):
             acc = 0.0
             for m in range(3):
                 acc += D1[k, m] * T1[m, i]
             dE[k, i] = acc
-    DT = np.zeros((3, 3, 3))  # D2[k] T1 (k, m, j)
     for k in range(3):
         for m in range(3):
             for j in range(3):
@@ -187,7 +193,6 @@ def material_frame_jet(e, theta, t_src, d_src, val, jac, hess):
                 for n in range(3):
                     acc += D2[k, m, n] * T1[n, j]
                 DT[k, m, j] = acc
-    dEE = np.zeros((3, 3, 3))
     for k in range(3):
         for i in range(3):
             for j in range(i, 3):
@@ -197,17 +202,14 @@ def material_frame_jet(e, theta, t_src, d_src, val, jac, hess):
                 dEE[k, i, j] = acc
                 dEE[k, j, i] = acc
     # b = t x d and its derivatives
-    b = np.empty(3)
     b[0] = t[1] * d[2] - t[2] * d[1]
     b[1] = t[2] * d[0] - t[0] * d[2]
     b[2] = t[0] * d[1] - t[1] * d[0]
-    bE = np.empty((3, 3))
     for i in range(3):
         # dt_i x d + t x dd_i
         bE[0, i] = (T1[1, i] * d[2] - T1[2, i] * d[1]) + (t[1] * dE[2, i] - t[2] * dE[1, i])
         bE[1, i] = (T1[2, i] * d[0] - T1[0, i] * d[2]) + (t[2] * dE[0, i] - t[0] * dE[2, i])
         bE[2, i] = (T1[0, i] * d[1] - T1[1, i] * d[0]) + (t[0] * dE[1, i] - t[1] * dE[0, i])
-    bEE = np.empty((3, 3, 3))
     for i in range(3):
         for j in range(i, 3):
             for k in range(3):

@@ -8,10 +8,17 @@ from snapmorph.cli import main
 
 def test_ci_snapshot_is_a_valid_map():
     assert CI_MAP.is_file(), f"{CI_MAP} is missing: run `make maps-ci` and commit it"
+    from pipeline.schema import SCHEMA_VERSION
+
     dm = DesignMap.load(CI_MAP)
     assert dm.attrs["grid"] == "ci"
+    assert dm.schema_version == SCHEMA_VERSION, "stale snapshot: run `make maps-ci`"
     ok = dm.dataset.status.values == 0
     assert ok.sum() >= ok.size // 2
+    # the released state exists wherever the released unit is still bistable
+    standing = ok & (dm.dataset.self_standing.values == 1)
+    assert standing.sum() >= ok.sum() // 2
+    assert (dm.dataset.theta_released.values[standing] < dm.dataset.theta.values[standing]).all()
 
 
 @pytest.mark.slow
