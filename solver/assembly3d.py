@@ -129,16 +129,26 @@ def assemble_system3d(q, n_nodes, edge_nodes, src_t, src_d, stretch_params, pair
 
     ``dof_scale`` (full,): dq_full = dof_scale * du_reduced (1 for positions, 1 / length for
     twists, so that reduced twist DOFs are lengths and the path followers' norms and
-    tolerances weigh them like displacements). Scratch is allocated once per call; the
-    element loops allocate nothing."""
+    tolerances weigh them like displacements)."""
+    n_frames = edge_nodes.shape[0]
+    return assemble_system3d_ws(q, n_nodes, edge_nodes, src_t, src_d, stretch_params,
+                                pair_edges, pair_signs, pair_params, stretch_full, stretch_red,
+                                pair_full, pair_red, dof_scale, band, grad_red, grad_full,
+                                np.empty((n_frames, 9)), np.empty((n_frames, 9, 4)),
+                                np.empty((n_frames, 9, 4, 4)))
+
+
+@njit(cache=True)
+def assemble_system3d_ws(q, n_nodes, edge_nodes, src_t, src_d, stretch_params, pair_edges,
+                         pair_signs, pair_params, stretch_full, stretch_red, pair_full,
+                         pair_red, dof_scale, band, grad_red, grad_full, vals, jacs, hesss):
+    """`assemble_system3d` with the frames' jets written into the caller's ``vals``
+    (n_frames, 9), ``jacs`` (n_frames, 9, 4), ``hesss`` (n_frames, 9, 4, 4): nothing is
+    allocated per element, and nothing large per call."""
     band[:, :] = 0.0
     grad_red[:] = 0.0
     grad_full[:] = 0.0
     energy = 0.0
-    n_frames = edge_nodes.shape[0]
-    vals = np.empty((n_frames, 9))
-    jacs = np.empty((n_frames, 9, 4))
-    hesss = np.empty((n_frames, 9, 4, 4))
     frame_jets(q, n_nodes, edge_nodes, src_t, src_d, vals, jacs, hesss)
     x6 = np.empty(6)
     g6 = np.empty(6)

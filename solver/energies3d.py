@@ -382,107 +382,81 @@ def chain_pair_ws(gz, hz, jac_a, hess_a, sign_a, jac_b, hess_b, sign_b, g8, h8, 
 # ---------------------------------------------------------------------------------------
 # The pair energy straight in edge coordinates p = (e_a, theta_a, e_b, theta_b): every
 # curvature and the twist are sums of dot and triple products of the six frame vectors
-# [t_a, m1_a, m2_a, t_b, m1_b, m2_b] (blocks 0..5 of z), so J^T (d2 f / dz2) J is formed
-# block by block from the frames' 3 x 4 Jacobians and never as an 18 x 18 matrix.
+# [t_a, m1_a, m2_a, t_b, m1_b, m2_b] (blocks 0..5 of z). The energy's Hessian is
+#   sum_f k_f (grad_p f grad_p f^T + (f - f_bar) J^T (d2 f / dz2) J) + sum_c (dE/dz_c) d2 z_c/dp2,
+# and d2 f / dz2 is a combination of the bilinear forms' constant Hessians and of a few
+# outer products of z-gradients; the bilinear parts of all three terms are added with their
+# final coefficients, block by block from the frames' 3 x 4 Jacobians (never an 18 x 18
+# matrix), the outer products in p (8 x 8).
 
 
 @njit(cache=True)
 def pair_edge_scratch():
     """Scratch arrays of `pair_terms_edges` (allocate once, reuse for every pair)."""
-    return (np.empty(18), np.empty((18, 4)), np.empty((18, 4, 4)), np.empty(18),
-            np.empty((8, 8)), np.empty(18), np.empty((8, 8)), np.empty(18), np.empty((8, 8)),
-            np.empty(18), np.empty((8, 8)), np.empty(18), np.empty(8), np.empty(8),
-            np.empty(8), np.empty(18), np.empty((4, 3)))
+    return (np.empty(18), np.empty((24, 4)), np.empty((5, 18)), np.empty((5, 8)), np.empty(18),
+            np.empty((8, 8)), np.empty(3), np.empty((4, 3)))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _jt(Jz, v, out):
     """out (8,) = J^T v for v (18,) w.r.t. z (block c reads edge c // 3)."""
-    for r in range(8):
-        out[r] = 0.0
-    for c in range(6):
-        o = 4 * (c // 3)
+    for o in range(2):
         for r in range(4):
             acc = 0.0
-            for i in range(3):
-                acc += Jz[3 * c + i, r] * v[3 * c + i]
-            out[o + r] += acc
-    return out
+            for i in range(9):
+                acc += Jz[9 * o + i, r] * v[9 * o + i]
+            out[4 * o + r] = acc
 
 
-@njit(cache=True)
-def _add_dot_p(z, Jz, A, B, coef, gz, S):
-    """Add coef * z_A . z_B (blocks A != B): its z-gradient to gz (18,) and
-    J^T (its z-Hessian) J to S (8, 8); returns coef * the value."""
+@njit(cache=True, inline="always")
+def _p_offset(A):
+    """Offset in p of the edge block A reads: blocks 0-2 (and the combination 6) edge a,
+    3-5 (and 7) edge b."""
+    return 4 * (A // 3) if A < 6 else 4 * (A - 6)
+
+
+@njit(cache=True, inline="always")
+def _dot_hess(Jz, A, B, coef, M):
+    """M[p_A, p_B] += coef J_A^T J_B: one side of J^T d2(z_A . z_B)/dz2 J (the other side
+    is M's transpose, added when M is symmetrised)."""
     pa = 3 * A
     pb = 3 * B
-    oa = 4 * (A // 3)
-    ob = 4 * (B // 3)
-    val = 0.0
-    for i in range(3):
-        val += z[pa + i] * z[pb + i]
-        gz[pa + i] += coef * z[pb + i]
-        gz[pb + i] += coef * z[pa + i]
+    oa = _p_offset(A)
+    ob = _p_offset(B)
     for r in range(4):
         for s in range(4):
-            acc = 0.0
-            for i in range(3):
-                acc += Jz[pa + i, r] * Jz[pb + i, s]
-            acc *= coef
-            S[oa + r, ob + s] += acc
-            S[ob + s, oa + r] += acc
-    return coef * val
+            M[oa + r, ob + s] += coef * (Jz[pa, r] * Jz[pb, s] + Jz[pa + 1, r] * Jz[pb + 1, s]
+                                         + Jz[pa + 2, r] * Jz[pb + 2, s])
 
 
-@njit(cache=True)
-def _add_cross_pair_p(Jz, P, Q, v, coef, S, W):
-    """Add coef * J_P^T [d2 (z_P . (z_Q x v)) / dz_P dz_Q] J_Q and its transpose to S:
-    entry (r, s) = J_P[:, r] . (J_Q[:, s] x v). ``W`` (4, 3) scratch."""
+@njit(cache=True, inline="always")
+def _cross_hess(Jz, P, Q, v, vo, coef, M, W):
+    """M[p_P, p_Q] += coef J_P[:, r] . (J_Q[:, s] x v): one side of J^T d2 (z_P . (z_Q x v))
+    / dz_P dz_Q J for a fixed vector v = v[vo:vo+3]. ``W`` (4, 3) scratch."""
     pp = 3 * P
     pq = 3 * Q
-    op = 4 * (P // 3)
-    oq = 4 * (Q // 3)
+    op = _p_offset(P)
+    oq = _p_offset(Q)
+    v0 = v[vo]
+    v1 = v[vo + 1]
+    v2 = v[vo + 2]
     for s in range(4):
-        W[s, 0] = Jz[pq + 1, s] * v[2] - Jz[pq + 2, s] * v[1]
-        W[s, 1] = Jz[pq + 2, s] * v[0] - Jz[pq + 0, s] * v[2]
-        W[s, 2] = Jz[pq + 0, s] * v[1] - Jz[pq + 1, s] * v[0]
+        W[s, 0] = coef * (Jz[pq + 1, s] * v2 - Jz[pq + 2, s] * v1)
+        W[s, 1] = coef * (Jz[pq + 2, s] * v0 - Jz[pq, s] * v2)
+        W[s, 2] = coef * (Jz[pq, s] * v1 - Jz[pq + 1, s] * v0)
     for r in range(4):
         for s in range(4):
-            acc = coef * (Jz[pp, r] * W[s, 0] + Jz[pp + 1, r] * W[s, 1]
-                          + Jz[pp + 2, r] * W[s, 2])
-            S[op + r, oq + s] += acc
-            S[oq + s, op + r] += acc
+            M[op + r, oq + s] += Jz[pp, r] * W[s, 0] + Jz[pp + 1, r] * W[s, 1] + Jz[pp + 2, r] * W[s, 2]
 
 
-@njit(cache=True)
-def _add_triple_p(z, Jz, P, Q, R, coef, gz, S, v, W):
-    """Add coef * z_P . (z_Q x z_R) (distinct blocks): z-gradient to gz, J^T H J to S;
-    returns coef * the value. ``v`` (18,) and ``W`` (4, 3) scratch."""
-    pp = 3 * P
-    pq = 3 * Q
-    pr = 3 * R
-    # cross products of the three vectors, in the scratch v: q x r, r x p, p x q
-    for k in range(3):
-        k1 = (k + 1) % 3
-        k2 = (k + 2) % 3
-        v[k] = z[pq + k1] * z[pr + k2] - z[pq + k2] * z[pr + k1]
-        v[3 + k] = z[pr + k1] * z[pp + k2] - z[pr + k2] * z[pp + k1]
-        v[6 + k] = z[pp + k1] * z[pq + k2] - z[pp + k2] * z[pq + k1]
-    val = z[pp] * v[0] + z[pp + 1] * v[1] + z[pp + 2] * v[2]
-    for k in range(3):
-        gz[pp + k] += coef * v[k]
-        gz[pq + k] += coef * v[3 + k]
-        gz[pr + k] += coef * v[6 + k]
-    # p . (q x r): d2/dp dq -> J_P^T [ . (J_Q x r)], d2/dq dr -> J_Q^T [ . (J_R x p)],
-    # d2/dr dp -> J_R^T [ . (J_P x q)] (cyclic)
-    for k in range(3):
-        v[9 + k] = z[pr + k]
-        v[12 + k] = z[pp + k]
-        v[15 + k] = z[pq + k]
-    _add_cross_pair_p(Jz, P, Q, v[9:12], coef, S, W)
-    _add_cross_pair_p(Jz, Q, R, v[12:15], coef, S, W)
-    _add_cross_pair_p(Jz, R, P, v[15:18], coef, S, W)
-    return coef * val
+@njit(cache=True, inline="always")
+def _cross_into(z, P, Q, out, o):
+    """out[o:o+3] = z_P x z_Q."""
+    p = 3 * P
+    q = 3 * Q
+    out[o] = z[p + 1] * z[q + 2] - z[p + 2] * z[q + 1]
+    out[o + 1] = z[p + 2] * z[q] - z[p] * z[q + 2]
+    out[o + 2] = z[p] * z[q + 1] - z[p + 1] * z[q]
 
 
 @njit(cache=True)
@@ -493,7 +467,7 @@ def pair_terms_edges(val_a, jac_a, hess_a, sign_a, val_b, jac_b, hess_b, sign_b,
     jets (`material_frame_jet`; sign -1: the edge enters against its direction). The same
     energy as `bending_terms` + `twist_terms` carried by `chain_pair`, without any 18 x 18
     matrix and without allocation (``ws``: `pair_edge_scratch`)."""
-    z, Jz, Hz, gN, SN, gD, SD, gX, SX, gY, SY, G, gp, dp, bp, v, W = ws
+    z, Jz, gz, gp, G, M, U, W = ws
     # signed frame vectors and their derivatives: z = [t_a, m1_a, m2_a, t_b, m1_b, m2_b]
     for c in range(9):
         fa = sign_a if (c < 3 or c >= 6) else 1.0
@@ -503,87 +477,156 @@ def pair_terms_edges(val_a, jac_a, hess_a, sign_a, val_b, jac_b, hess_b, sign_b,
         for r in range(4):
             Jz[c, r] = fa * jac_a[c, r]
             Jz[9 + c, r] = fb * jac_b[c, r]
-            for s in range(4):
-                Hz[c, r, s] = fa * hess_a[c, r, s]
-                Hz[9 + c, r, s] = fb * hess_b[c, r, s]
-    for i in range(18):
-        G[i] = 0.0
-        gD[i] = 0.0
-        gX[i] = 0.0
-        gY[i] = 0.0
-    for r in range(8):
-        g8[r] = 0.0
-        for s in range(8):
-            h8[r, s] = 0.0
-            SD[r, s] = 0.0
-            SX[r, s] = 0.0
-            SY[r, s] = 0.0
-    energy = 0.0
-    # bending: kappa = N / D, D = 1 + t_a . t_b, N = +-(director sum) . (t_a x t_b)
-    D = 1.0 + _add_dot_p(z, Jz, 0, 3, 1.0, gD, SD)
-    _jt(Jz, gD, dp)
-    for which in range(2):
-        for i in range(18):
-            gN[i] = 0.0
-        for r in range(8):
-            for s in range(8):
-                SN[r, s] = 0.0
-        if which == 0:  # kappa1 = 1/2 (m2_a + m2_b) . kb
-            N = (_add_triple_p(z, Jz, 2, 0, 3, 1.0, gN, SN, v, W)
-                 + _add_triple_p(z, Jz, 5, 0, 3, 1.0, gN, SN, v, W))
-            kk = k1
-            kbar = kappa1_bar
-        else:  # kappa2 = -1/2 (m1_a + m1_b) . kb
-            N = (_add_triple_p(z, Jz, 1, 0, 3, -1.0, gN, SN, v, W)
-                 + _add_triple_p(z, Jz, 4, 0, 3, -1.0, gN, SN, v, W))
-            kk = k2
-            kbar = kappa2_bar
-        f = N / D
-        dk = f - kbar
-        energy += 0.5 * kk * dk * dk
-        for i in range(18):
-            gN[i] = (gN[i] - f * gD[i]) / D  # now d kappa / dz
-            G[i] += kk * dk * gN[i]
-        _jt(Jz, gN, gp)
-        c = kk * dk / D
-        for r in range(8):
-            g8[r] += kk * dk * gp[r]
-            for s in range(8):
-                h8[r, s] += (kk * gp[r] * gp[s]
-                             + c * (SN[r, s] - f * SD[r, s] - gp[r] * dp[s] - dp[r] * gp[s]))
-    # twisting: psi = 2 atan2(Y, X), X = 1 + tr Q, Y = (sum_k a_k x b_k) . t_a
-    X = (1.0 + _add_dot_p(z, Jz, 0, 3, 1.0, gX, SX) + _add_dot_p(z, Jz, 1, 4, 1.0, gX, SX)
-         + _add_dot_p(z, Jz, 2, 5, 1.0, gX, SX))
-    Y = (_add_triple_p(z, Jz, 0, 1, 4, 1.0, gY, SY, v, W)
-         + _add_triple_p(z, Jz, 0, 2, 5, 1.0, gY, SY, v, W))
+    # z-gradients (rows of gz): 0 D = 1 + t_a.t_b, 1 N1 = (m2_a + m2_b).(t_a x t_b),
+    # 2 N2 = -(m1_a + m1_b).(t_a x t_b), 3 X = 1 + tr Q, 4 Y = t_a.(m1_a x m1_b + m2_a x m2_b)
+    for i in range(5):
+        for j in range(18):
+            gz[i, j] = 0.0
+    _cross_into(z, 0, 3, U, 0)  # U = t_a x t_b
+    D = 1.0
+    X = 1.0
+    N1 = 0.0
+    N2 = 0.0
+    for k in range(3):
+        ta = z[k]
+        tb = z[9 + k]
+        D += ta * tb
+        X += z[3 + k] * z[12 + k] + z[6 + k] * z[15 + k]
+        N1 += (z[6 + k] + z[15 + k]) * U[k]
+        N2 -= (z[3 + k] + z[12 + k]) * U[k]
+        gz[0, k] = tb
+        gz[0, 9 + k] = ta
+        gz[1, 6 + k] = U[k]
+        gz[1, 15 + k] = U[k]
+        gz[2, 3 + k] = -U[k]
+        gz[2, 12 + k] = -U[k]
+        gz[3, k] = tb
+        gz[3, 9 + k] = ta
+        gz[3, 3 + k] = z[12 + k]
+        gz[3, 12 + k] = z[3 + k]
+        gz[3, 6 + k] = z[15 + k]
+        gz[3, 15 + k] = z[6 + k]
+    X += D - 1.0
+    # d N / d t_a = t_b x u, d N / d t_b = u x t_a (u the director sum of N1, N2)
+    for k in range(3):
+        k1_ = (k + 1) % 3
+        k2_ = (k + 2) % 3
+        u1a = z[6 + k1_] + z[15 + k1_]
+        u1b = z[6 + k2_] + z[15 + k2_]
+        u2a = -(z[3 + k1_] + z[12 + k1_])
+        u2b = -(z[3 + k2_] + z[12 + k2_])
+        gz[1, k] = z[9 + k1_] * u1b - z[9 + k2_] * u1a
+        gz[1, 9 + k] = u1a * z[k2_] - u1b * z[k1_]
+        gz[2, k] = z[9 + k1_] * u2b - z[9 + k2_] * u2a
+        gz[2, 9 + k] = u2a * z[k2_] - u2b * z[k1_]
+    # Y = t_a . (m1_a x m1_b) + t_a . (m2_a x m2_b)
+    _cross_into(z, 1, 4, U, 0)
+    Y = z[0] * U[0] + z[1] * U[1] + z[2] * U[2]
+    for k in range(3):
+        gz[4, k] = U[k]
+    _cross_into(z, 2, 5, U, 0)
+    Y += z[0] * U[0] + z[1] * U[1] + z[2] * U[2]
+    for k in range(3):
+        gz[4, k] += U[k]
+    _cross_into(z, 4, 0, U, 0)  # d/dm1_a = m1_b x t_a
+    for k in range(3):
+        gz[4, 3 + k] = U[k]
+    _cross_into(z, 0, 1, U, 0)  # d/dm1_b = t_a x m1_a
+    for k in range(3):
+        gz[4, 12 + k] = U[k]
+    _cross_into(z, 5, 0, U, 0)
+    for k in range(3):
+        gz[4, 6 + k] = U[k]
+    _cross_into(z, 0, 2, U, 0)
+    for k in range(3):
+        gz[4, 15 + k] = U[k]
+    for i in range(5):
+        _jt(Jz, gz[i], gp[i])
+    # the three terms: kappa1 = N1 / D, kappa2 = N2 / D, psi = 2 atan2(Y, X)
+    kap1 = N1 / D
+    kap2 = N2 / D
+    d1 = kap1 - kappa1_bar
+    d2 = kap2 - kappa2_bar
     r2 = X * X + Y * Y
     psi = 2.0 * np.arctan2(Y, X)
-    d = psi - psi_bar
-    energy += 0.5 * kt * d * d
-    _jt(Jz, gX, dp)  # a = J^T dX/dz
-    _jt(Jz, gY, bp)  # b = J^T dY/dz
-    for i in range(18):
-        G[i] += kt * d * 2.0 * (X * gY[i] - Y * gX[i]) / r2
-    c2 = 2.0 / r2
-    c4 = 2.0 / (r2 * r2)
-    sym = Y * Y - X * X
-    cross = 2.0 * X * Y
+    dt = psi - psi_bar
+    energy = 0.5 * (k1 * d1 * d1 + k2 * d2 * d2 + kt * dt * dt)
+    c1 = k1 * d1 / D
+    c2 = k2 * d2 / D
+    ct = kt * dt
+    # dE/dz and dE/dp; gradients of kappa = (gN - kappa gD) / D, of psi = 2 (X gY - Y gX) / r2
+    for j in range(18):
+        G[j] = (c1 * (gz[1, j] - kap1 * gz[0, j]) + c2 * (gz[2, j] - kap2 * gz[0, j])
+                + ct * 2.0 * (X * gz[4, j] - Y * gz[3, j]) / r2)
     for r in range(8):
-        gp[r] = c2 * (X * bp[r] - Y * dp[r])
-        g8[r] += kt * d * gp[r]
+        g1 = (gp[1, r] - kap1 * gp[0, r]) / D
+        g2 = (gp[2, r] - kap2 * gp[0, r]) / D
+        gt = 2.0 * (X * gp[4, r] - Y * gp[3, r]) / r2
+        g8[r] = k1 * d1 * g1 + k2 * d2 * g2 + ct * gt
+        gp[1, r] = g1  # gp rows now: 0 dD, 1 dkappa1, 2 dkappa2, 3 dX, 4 dY (p)
+        gp[2, r] = g2
+    # bilinear parts, one-sided into M (symmetrised below):
+    # k d J^T(d2 kappa)J -> c (d2 N - kappa d2 D), k d J^T(d2 psi)J -> ct 2 (X d2 Y - Y d2 X)/r2
     for r in range(8):
         for s in range(8):
-            hpsi = (c2 * (X * SY[r, s] - Y * SX[r, s])
-                    + c4 * (sym * (dp[r] * bp[s] + bp[r] * dp[s])
-                            + cross * (dp[r] * dp[s] - bp[r] * bp[s])))
-            h8[r, s] += kt * (gp[r] * gp[s] + d * hpsi)
-    # the frames' own curvature: sum_c (dE/dz_c) d2 z_c / dp2
-    for c in range(18):
-        o = 0 if c < 9 else 4
-        Gc = G[c]
+            M[r, s] = 0.0
+    cy = ct * 2.0 * X / r2
+    cx = -ct * 2.0 * Y / r2
+    _dot_hess(Jz, 0, 3, cx - c1 * kap1 - c2 * kap2, M)
+    _dot_hess(Jz, 1, 4, cx, M)
+    _dot_hess(Jz, 2, 5, cx, M)
+    # N1 + N2 = U . (t_a x t_b), U = c1 (m2_a + m2_b) - c2 (m1_a + m1_b) (coefficients in)
+    for k in range(3):
+        U[k] = c1 * (z[6 + k] + z[15 + k]) - c2 * (z[3 + k] + z[12 + k])
+    _cross_hess(Jz, 0, 3, U, 0, 1.0, M, W)  # (t_a, t_b) with u
+    # u's Jacobian on each edge, blocks 6 (edge a) and 7 (edge b) of Jz
+    for k in range(3):
         for r in range(4):
-            for s in range(4):
-                h8[o + r, o + s] += Gc * Hz[c, r, s]
+            Jz[18 + k, r] = c1 * Jz[6 + k, r] - c2 * Jz[3 + k, r]
+            Jz[21 + k, r] = c1 * Jz[15 + k, r] - c2 * Jz[12 + k, r]
+    for P in (6, 7):
+        _cross_hess(Jz, P, 0, z, 9, 1.0, M, W)  # u . (t_a x t_b): (u, t_a) with t_b
+        _cross_hess(Jz, 3, P, z, 0, 1.0, M, W)  # (t_b, u) with t_a
+    # Y: t_a . (m_a x m_b) for m = m1, m2
+    for A in (1, 2):
+        B = A + 3
+        _cross_hess(Jz, 0, A, z, 3 * B, cy, M, W)
+        _cross_hess(Jz, A, B, z, 0, cy, M, W)
+        _cross_hess(Jz, B, 0, z, 3 * A, cy, M, W)
+    # outer products in p, the frames' own curvature, symmetrisation
+    c4 = ct * 2.0 / (r2 * r2)
+    sym = c4 * (Y * Y - X * X)
+    crs = c4 * 2.0 * X * Y
+    for r in range(8):
+        # reuse gz's first two rows for d psi/dp and c1 d kappa1/dp + c2 d kappa2/dp
+        gz[0, r] = 2.0 * (X * gp[4, r] - Y * gp[3, r]) / r2
+        gz[1, r] = c1 * gp[1, r] + c2 * gp[2, r]
+    for r in range(8):
+        a_r = gp[3, r]
+        b_r = gp[4, r]
+        g1_r = k1 * gp[1, r]
+        g2_r = k2 * gp[2, r]
+        gt_r = kt * gz[0, r]
+        w_r = gz[1, r]
+        dD_r = gp[0, r]
+        for s in range(r, 8):
+            a_s = gp[3, s]
+            b_s = gp[4, s]
+            h = (M[r, s] + M[s, r] + g1_r * gp[1, s] + g2_r * gp[2, s] + gt_r * gz[0, s]
+                 - w_r * gp[0, s] - dD_r * gz[1, s]
+                 + sym * (a_r * b_s + b_r * a_s) + crs * (a_r * a_s - b_r * b_s))
+            h8[r, s] = h
+    # the frames' own curvature sum_c (dE/dz_c) d2 z_c / dp2 (z_c = sign val_c)
+    for c in range(9):
+        ga = G[c] * (sign_a if (c < 3 or c >= 6) else 1.0)
+        gb = G[9 + c] * (sign_b if (c < 3 or c >= 6) else 1.0)
+        for r in range(4):
+            for s in range(r, 4):
+                h8[r, s] += ga * hess_a[c, r, s]
+                h8[4 + r, 4 + s] += gb * hess_b[c, r, s]
+    for r in range(8):
+        for s in range(r + 1, 8):
+            h8[s, r] = h8[r, s]
     return energy
 
 

@@ -133,13 +133,16 @@ def material_frame_jet_ws(e, theta, t_src, d_src, val, jac, hess, ws):
     for k in range(3):
         for i in range(3):
             T1[k, i] = ((1.0 if k == i else 0.0) - t[k] * t[i]) * inv
+    inv2 = inv * inv
     for k in range(3):
         for i in range(3):
-            for j in range(3):
-                T2[k, i, j] = (3.0 * t[i] * t[j] * t[k]
-                               - (t[i] if j == k else 0.0)
-                               - (t[j] if i == k else 0.0)
-                               - (t[k] if i == j else 0.0)) * inv * inv
+            for j in range(i, 3):
+                v = (3.0 * t[i] * t[j] * t[k]
+                     - (t[i] if j == k else 0.0)
+                     - (t[j] if i == k else 0.0)
+                     - (t[k] if i == j else 0.0)) * inv2
+                T2[k, i, j] = v
+                T2[k, j, i] = v
     # d(t) = c d_src + w x d_src + w (w . d_src) / (1 + c), c = t_src . t, w = t_src x t;
     # c and w are linear in t, so all its derivatives w.r.t. the vector t are closed form.
     c = t_src[0] * t[0] + t_src[1] * t[1] + t_src[2] * t[2]
@@ -174,11 +177,13 @@ def material_frame_jet_ws(e, theta, t_src, d_src, val, jac, hess, ws):
     A2 = A * A
     for k in range(3):
         for i in range(3):
-            for j in range(3):
-                D2[k, i, j] = (A * (W[j, k] * u[i] + W[i, k] * u[j])
-                               - A2 * s * (W[j, k] * t_src[i] + W[i, k] * t_src[j])
-                               - A2 * w[k] * (u[j] * t_src[i] + u[i] * t_src[j])
-                               + 2.0 * A2 * A * w[k] * s * t_src[i] * t_src[j])
+            for j in range(i, 3):
+                v = (A * (W[j, k] * u[i] + W[i, k] * u[j])
+                     - A2 * s * (W[j, k] * t_src[i] + W[i, k] * t_src[j])
+                     - A2 * w[k] * (u[j] * t_src[i] + u[i] * t_src[j])
+                     + 2.0 * A2 * A * w[k] * s * t_src[i] * t_src[j])
+                D2[k, i, j] = v
+                D2[k, j, i] = v
     # chain to the edge vector: dd/de = D1 T1, d2d/de2 = D1 T2 + T1^T D2 T1
     for k in range(3):
         for i in range(3):

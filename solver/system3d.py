@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver.assembly3d import apply_scaled_increment, assemble_system3d, element_dofs3d
+from solver.assembly3d import apply_scaled_increment, assemble_system3d_ws, element_dofs3d
 from solver.frames3d import reference_twist, transport_frames
-from solver.system import ReducedSystem
+from solver.iteration3d import mgdc_iteration3d, newton_iteration3d
+from solver.system import PIVOT_TOL, ReducedSystem
 
 
 class RodSystem3D(ReducedSystem):
@@ -50,7 +51,15 @@ class RodSystem3D(ReducedSystem):
         self._band_copy = np.empty_like(self.band)
         self.grad = np.zeros(max(self.n, 1))
         self.grad_full = np.zeros(self.dof_map.shape[0])
-        self._zero_correction = np.zeros(max(self.n, 1))
+        self._work = np.zeros((max(self.n, 1), 3))
+        # the arrays the compiled kernels read (src_t, src_d are updated in place by accept)
+        # and the frames' jets, written at every assembly
+        n_frames = self.edge_nodes.shape[0]
+        sf, sr, pf, pr = self.element_dofs
+        self.model_arrays = (self.n_nodes, self.edge_nodes, self.src_t, self.src_d,
+                             self.stretch_params, self.pair_edges, self.pair_signs,
+                             self.pair_params, sf, sr, pf, pr, np.empty((n_frames, 9)),
+                             np.empty((n_frames, 9, 4)), np.empty((n_frames, 9, 4, 4)))
         self.energy = 0.0
         self.negative_eigenvalues = 0
         self.factor_ok = False
@@ -59,12 +68,11 @@ class RodSystem3D(ReducedSystem):
 
     def evaluate(self, q):
         """Assemble energy (J), gradients (N, N m) and K at the state ``q``."""
-        sf, sr, pf, pr = self.element_dofs
-        self.energy = assemble_system3d(
-            np.ascontiguousarray(q, dtype=float), self.n_nodes, self.edge_nodes, self.src_t,
-            self.src_d, self.stretch_params, self.pair_edges, self.pair_signs,
-            self.pair_params, sf, sr, pf, pr, self.dof_scale, self.band, self.grad,
-            self.grad_full)
+        m = self.model_arrays
+        self.energy = assemble_system3d_ws(
+            np.ascontiguousarray(q, dtype=float), m[0], m[1], m[2], m[3], m[4], m[5], m[6],
+            m[7], m[8], m[9], m[10], m[11], self.dof_scale, self.band, self.grad,
+            self.grad_full, m[12], m[13], m[14])
         return self.energy
 
     def reduced(self, q):
@@ -83,16 +91,24 @@ class RodSystem3D(ReducedSystem):
                                float(scale))
 
     def fused_newton(self, q, lam, P, tol_force):
-        """No fused kernel for 3-D rods: status 1 sends the driver down the general path."""
-        return 1, np.inf, np.inf
+        """One fused Newton iteration at load lam P (see `solver.iteration3d`); updates q.
+
+        Returns (status, residual_max, du_max): status 0 converged (K at q factorised),
+        1 LDL^T failed (nothing done: use evaluate/factor/solve), 2 q updated."""
+        status, neg, r_max, du_max, energy = newton_iteration3d(
+            q, lam, P, self.model_arrays, self.dof_map, self.dof_scale, self.band, self.grad,
+            self.grad_full, self._work, PIVOT_TOL, tol_force)
+        self._after_fused(status, neg, energy)
+        return status, r_max, du_max
 
     def fused_mgdc(self, q, lam, P, uP1, tol_force):
-        """No fused kernel for 3-D rods: status 1 sends the driver down the general path."""
-        return 1, np.inf, np.inf, 0.0
-
-    @property
-    def last_correction(self):
-        return self._zero_correction
+        """One fused MGDC corrector iteration; updates q. Returns (status, residual_max,
+        du_max, dlam) with the statuses of `fused_newton`."""
+        status, neg, r_max, du_max, dl, energy = mgdc_iteration3d(
+            q, lam, P, uP1, self.model_arrays, self.dof_map, self.dof_scale, self.band,
+            self.grad, self.grad_full, self._work, PIVOT_TOL, tol_force)
+        self._after_fused(status, neg, energy)
+        return status, r_max, du_max, dl
 
     def accept(self, q):
         """Carry the reference frames to the state ``q`` by time-parallel transport (the

@@ -12,7 +12,9 @@ from solver.energies3d import (
     bending_terms,
     chain_pair,
     material_curvature,
+    pair_edge_scratch,
     pair_frames,
+    pair_terms_edges,
     stretch_terms,
     tip_moment_terms,
     twist_angle,
@@ -213,6 +215,52 @@ def test_pair_energy_in_edge_coordinates_fd(rng, signs):
         return E, g8, h8
 
     fd_check(fun, p0, 1e-8, 2e-6)
+
+
+def _pair_jets(p, src):
+    vals, jacs, hesss = np.empty((2, 9)), np.empty((2, 9, 4)), np.empty((2, 9, 4, 4))
+    for s in range(2):
+        material_frame_jet(p[4 * s: 4 * s + 3], p[4 * s + 3], src[s][0], src[s][1],
+                           vals[s], jacs[s], hesss[s])
+    return vals, jacs, hesss
+
+
+@pytest.mark.parametrize("signs", [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)])
+def test_pair_kernel_in_edge_coordinates_fd_and_equal_to_chained_kernels(rng, signs):
+    """`pair_terms_edges` (the assembly's allocation-free pair kernel, formed straight in
+    (e_a, theta_a, e_b, theta_b)) against finite differences, and equal to round-off to
+    `bending_terms` + `twist_terms` carried by `chain_pair` at random states."""
+    sa, sb = signs
+    params = (2e-3, 5e-2, 1e-3, 0.05, 0.01, 0.1)  # k1, k2, kt, kappa1_bar, kappa2_bar, psi_bar
+    ws = pair_edge_scratch()
+
+    def fun(p, src):
+        vals, jacs, hesss = _pair_jets(p, src)
+        g8, h8 = np.empty(8), np.empty((8, 8))
+        E = pair_terms_edges(vals[0], jacs[0], hesss[0], sa, vals[1], jacs[1], hesss[1], sb,
+                             *params, g8, h8, ws)
+        return E, g8, h8
+
+    for trial in range(5):
+        ea = rng.normal(size=3) * 1e-2
+        eb = sa * sb * ea + rng.normal(size=3) * 5e-3
+        src = [_random_source(rng, ea), _random_source(rng, eb)]
+        p0 = np.concatenate([ea, [rng.normal()], eb, [rng.normal()]])
+        if trial == 0:
+            fd_check(lambda p: fun(p, src), p0, 1e-8, 2e-6)
+        E, g8, h8 = fun(p0, src)
+        vals, jacs, hesss = _pair_jets(p0, src)
+        z = np.empty(18)
+        pair_frames(vals[0], sa, vals[1], sb, z)
+        gz, hz, gt, ht = np.empty(18), np.empty((18, 18)), np.empty(18), np.empty((18, 18))
+        E_ref = bending_terms(z, params[0], params[1], params[3], params[4], gz, hz)
+        E_ref += twist_terms(z, params[2], params[5], gt, ht)
+        g_ref, h_ref = np.empty(8), np.empty((8, 8))
+        chain_pair(gz + gt, hz + ht, jacs[0], hesss[0], sa, jacs[1], hesss[1], sb, g_ref, h_ref)
+        assert E == pytest.approx(E_ref, rel=1e-12)
+        np.testing.assert_allclose(g8, g_ref, rtol=0, atol=1e-11 * np.max(np.abs(g_ref)))
+        np.testing.assert_allclose(h8, h_ref, rtol=0, atol=1e-11 * np.max(np.abs(h_ref)))
+        np.testing.assert_array_equal(h8, h8.T)
 
 
 def test_tip_moment_fd(rng):
