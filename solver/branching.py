@@ -79,6 +79,7 @@ class Reroute:
     step: np.ndarray
     rate: np.ndarray | None = None
     distance: float = 0.0  # scaled distance (u, omega lam) from the point to the state, m
+    new_point: bool = False  # ``critical`` is not a path row yet (see `rig_onwards`)
 
 
 class BranchMonitor:
@@ -115,6 +116,11 @@ class BranchMonitor:
         self.force_unit = float(force_unit)  # N per unit of the systems' forces
         self._switched_at: list[np.ndarray] = []  # states of the points switched at
         self.rig_jumps: list[float] = []  # d (m) where the path jumped as a rig snaps
+        # A backward branch taken by the tangent plane (where the rig would jump) is on
+        # probation until the held count drops back to its value before the point (a true
+        # snap-back restabilises at its limit of d); see `excursion_verdict`.
+        self.excursion: dict | None = None
+        self.abandoned: list[float] = []  # d (m) of points whose backward branch was left
         self._system = system
         self._P = None
         self.points: list[CriticalPoint] = []
@@ -242,6 +248,11 @@ class BranchMonitor:
                 reroute = self._rig_switch(a, c, allow_jump=True if repeat else None)
             if reroute is None and not repeat:
                 reroute = self._switch(a, c, phi, eps)
+                if reroute is not None and rig_ok and reroute.state.dir_disp < 0.0:
+                    self.excursion = {"a": a, "c": c, "held_before": a.neg_disp,
+                                      "points": len(self.points)}
+                if reroute is None and rig_ok:  # no other branch found: the rig jumps
+                    reroute = self._rig_switch(a, c, allow_jump=True)
             if reroute is not None:
                 self._switched_at.append(c.q.copy())
         if reroute is None:
@@ -249,6 +260,39 @@ class BranchMonitor:
             return None
         point.switched = True
         self.switches += 1
+        return reroute
+
+    def excursion_verdict(self, new: PathState) -> str | None:
+        """On a backward branch left by the tangent plane (`_maybe_switch`): "kept" once the
+        held count is back to its value before the point (a true snap-back, which
+        restabilises where d turns), "abandon" when it exceeds that value by more than one
+        (the branch does not restabilise where d turns but climbs to ever less stable
+        branches: the wandering of issue 12), else None (still on probation)."""
+        if self.excursion is None or new.neg_disp < 0:
+            return None
+        before = self.excursion["held_before"]
+        if new.neg_disp <= before:
+            self.excursion = None
+            return "kept"
+        if new.neg_disp > before + 1:
+            return "abandon"
+        return None
+
+    def abandon_excursion(self) -> Reroute | None:
+        """Leave the backward branch on probation: back at its bifurcation point, do what a
+        displacement-controlled rig does there (jump onwards, `_rig_switch`). The critical
+        points met on the abandoned branch are dropped. Returns a `Reroute` from the point,
+        or None (the path cannot go on)."""
+        ex, self.excursion = self.excursion, None
+        if ex is None:
+            return None
+        del self.points[ex["points"]:]
+        t0 = time.perf_counter()
+        reroute = self._rig_switch(ex["a"], ex["c"], allow_jump=True)
+        self.seconds += time.perf_counter() - t0
+        if reroute is not None:
+            self.abandoned.append(float(ex["c"].d))
+            self.history = [reroute.critical, reroute.state]
         return reroute
 
     def _modes_at(self, q, m):
@@ -402,24 +446,79 @@ class BranchMonitor:
                 self.structure, [(self.control.node, self.control_axis)])[0]
         return self._held
 
-    def rig_onwards(self):
+    def rig_onwards(self, index=None):
         """The driver is stuck at its last state (its steps shrank to nothing, e.g. at a
-        point where several branches meet and a limit point coincides, or at a snap-back
-        under displacement control): do what a displacement-controlled rig does there
-        (`_rig_switch` from the last state). Returns a `Reroute` whose ``critical`` is the
-        last state itself (already a path row), or None."""
+        point where several branches meet and a limit point coincides, at a snap-back
+        under displacement control, or right at a bifurcation that load control cannot
+        step across): do what a displacement-controlled rig does there. First, the rig
+        steps on along the current branch (`_critical_ahead`): when the stability count
+        changes on the way, the bifurcation is located and recorded (``index``: the path
+        row of the last state) and left as at any other (the returned `Reroute` has
+        ``new_point`` True: its ``critical`` is not a path row yet). Otherwise the rig
+        moves on from the last state (`_rig_switch`); the `Reroute`'s ``critical`` is then
+        the last state itself (already a path row). None when neither works."""
         if self.control_axis is None or self.rig_step is None:
             return None
         c = self.history[-1]
         a = self.history[-2] if len(self.history) > 1 else c
         t0 = time.perf_counter()
-        # within the driver's own iteration budget: a path stuck because the caller's
-        # max_iter is too small stays stuck
-        reroute = self._rig_switch(a, c, allow_jump=True, settle_iter=4 * self.driver_max_iter)
+        reroute = None
+        if index is not None:
+            reroute = self._critical_ahead(a, c, index)
+        if reroute is None:
+            # within the driver's own iteration budget: a path stuck because the caller's
+            # max_iter is too small stays stuck
+            reroute = self._rig_switch(a, c, allow_jump=True,
+                                       settle_iter=4 * self.driver_max_iter)
+            if reroute is not None:
+                self.history = [c, reroute.state]
+        else:
+            reroute.new_point = True
+            self.history = [reroute.critical, reroute.state]
         self.seconds += time.perf_counter() - t0
-        if reroute is not None:
-            self.history = [c, reroute.state]
         return reroute
+
+    def _critical_ahead(self, a, c, index):
+        """Does a bifurcation sit just ahead of the stuck state c (reached from a)? The
+        rig moves the pushed node on by ``rig_step`` along the arriving chord and Newton
+        (no descent: it stays on the current branch, e.g. in a symmetric structure's
+        symmetric subspace) solves there; when the held count differs from c's, the point
+        between is located and handled by `_bifurcation`. Returns its `Reroute` or None
+        (nothing ahead, or not switched; a located point is recorded either way).
+        Without it, a load-controlled path stuck at a bifurcation (steps shrinking to
+        nothing as the corrector slides off along the mode) was moved on by the rig onto
+        the other branch with no critical point recorded (3-D lateral-torsional
+        buckling at 201 nodes)."""
+        from solver.continuation import _newton  # (a cycle at import time otherwise)
+
+        ctl, axis = self.control, self.control_axis
+        sysd = self.held_system
+        delta = self.rig_step
+        q0 = self.structure.initial_state()
+        held = ctl.member_dofs[:, axis]
+        q = c.q.copy()
+        if c.d - a.d > 1e-3 * delta:
+            q += (c.q - a.q) * (delta / (c.d - a.d))
+        q[held] = q0[held] + ctl.direction[axis] * (c.d + delta)
+        it = _newton(sysd, q, 0.0, None, self.tol * self.fscale, 1e-11 * self.length,
+                     self.max_iter, 0.25 * self.length)
+        if it < 0:
+            return None
+        F = ctl.force(sysd)
+        sysm = self.system
+        self._restore(q)
+        if not sysm.factor_ok:
+            self._restore(c.q)
+            return None
+        flex = float(self.P @ sysm.solve(self.P))
+        negative = sysm.negative_eigenvalues
+        b = PathState(q, F / self.load_unit, _node_displacement(self, q), negative,
+                      held_count(negative, flex), 0.0, 1.0, sysm.energy)
+        _, crossing = _classify(c, b.neg_disp, 1.0 if c.dir_disp >= 0.0 else -1.0)
+        if not crossing:
+            self._restore(c.q)
+            return None
+        return self._bifurcation(c, b, crossing, index)
 
     def _rig_switch(self, a, c, allow_jump=None, settle_iter=100):
         """What a displacement-controlled rig does at the bifurcation point c (reached from
@@ -549,11 +648,19 @@ class BranchMonitor:
             a1, a2 = 0.0, 1.0
         t = -a2 * e1 + a1 * e2
         t /= np.linalg.norm(t)
+        ta = (a1 * e1 + a2 * e2) / np.hypot(a1, a2)  # the arriving branch's tangent
         found = []
         for direction in (t, -t):
             state = self._beyond(c, direction, omega, eps)
-            if state is not None:
-                found.append((state[0], float(direction @ e1), state[1], state[2], direction))
+            if state is None:
+                continue
+            # Newton on the plane may fall back onto the arriving branch (it crosses the
+            # plane too); such a state lies along ta rather than t, and taking it (it may
+            # well advance d most) would stay on the branch just left
+            dz = np.append(self.system.reduced(state[1]) - uc, omega * (state[2] - c.lam))
+            if abs(float(dz @ t)) <= abs(float(dz @ ta)):
+                continue
+            found.append((state[0], float(direction @ e1), state[1], state[2], direction))
         if not found:
             return None
         _, _, q, lam, direction = _forward(found, c.d, self.length)

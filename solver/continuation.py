@@ -32,6 +32,11 @@ TOL_DISP = 1e-11
 # small the step, a fold of the path that a long step jumped over does not.
 CROSSING_REFINE = 1.0 / 256.0
 
+# A path on which the pushed node travels (sum of |dd|) more than this times the push
+# distance goes back and forth between branches instead of on to the target: it is stopped
+# with a "stopped: the path wanders" status (a snap-back adds its own return only).
+WANDER = 6.0
+
 # A push may not ask for more than this times the structure's size (its largest extent): a
 # node of a held structure cannot move that far without stretching its rods several-fold.
 MAX_DISTANCE = 10.0
@@ -533,7 +538,7 @@ def follow_displacement(
         if it < 0:
             dd = step / 2
             if dd < o["min_step_ratio"] * dd0:
-                reroute = _rig_rescue(monitor, rec)
+                reroute = _rig_rescue(monitor, rec, unit, held=True)
                 if reroute is not None:  # the rig moved on (a snap): continue from there
                     q, d = reroute.state.q.copy(), reroute.state.d
                     q_prev, d_prev, dd = None, d, dd0
@@ -672,6 +677,7 @@ def follow_mgdc(
     rejected = 0
     total_iterations = 0
     rescued = False
+    travelled = 0.0  # sum of |dd| along the path, m (wandering guard)
     while d < control.distance:
         if len(rec.rows["d"]) > max_steps:
             status = f"stopped: more than {max_steps} steps"
@@ -743,7 +749,7 @@ def follow_mgdc(
                         f"not converged: MGDC step size underflow near d = {d:.6g} m, "
                         f"F = {lam * unit * fu:.6g} N"
                     )
-                    reroute = _rig_rescue(monitor, rec)
+                    reroute = _rig_rescue(monitor, rec, unit)
                     if reroute is not None:  # the rig moved on: continue from there
                         s_new = reroute.state
                         q, lam, step_prev = s_new.q.copy(), s_new.lam, reroute.step
@@ -779,10 +785,28 @@ def follow_mgdc(
             orient = 1.0 if float(uP @ step_prev) >= 0.0 else -1.0
             new = PathState(q.copy(), lam, d, neg, negd, orient,
                             orient * (1.0 if flex >= 0.0 else -1.0), energy)
-            reroute = monitor.observe(new, len(rec.rows["d"]) - 1)
+            verdict = monitor.excursion_verdict(new)
+            if verdict == "abandon":
+                # the backward branch taken at a bifurcation climbs to ever less stable
+                # branches instead of restabilising: back to the point, the rig jumps on
+                row = monitor.excursion["row"]
+                reroute = monitor.abandon_excursion()
+                if reroute is None:
+                    status = (f"stopped: the branch left at the bifurcation at d = "
+                              f"{rec.rows['d'][row]:.6g} m turns back and does not "
+                              f"restabilise, and no stable state lies ahead of the point")
+                    break
+                _rewind(rec, row + 1)
+                travelled = float(np.sum(np.abs(np.diff(rec.rows["d"]))))
+            else:
+                reroute = monitor.observe(new, len(rec.rows["d"]) - 1)
+                if reroute is not None:
+                    if monitor.excursion is not None and "row" not in monitor.excursion:
+                        monitor.excursion["row"] = len(rec.rows["d"])
+                    c = reroute.critical
+                    rec.add(c.d, c.lam * unit, c.q, c.energy, 0, c.neg_force, c.neg_disp)
             if reroute is not None:
-                c, s_new = reroute.critical, reroute.state
-                rec.add(c.d, c.lam * unit, c.q, c.energy, 0, c.neg_force, c.neg_disp)
+                s_new = reroute.state
                 # the monitor left the system factorised at the first state of the new branch
                 q, lam, step_prev = s_new.q.copy(), s_new.lam, reroute.step
                 system.accept(q)
@@ -794,6 +818,10 @@ def follow_mgdc(
                 d, neg, negd = s_new.d, s_new.neg_force, s_new.neg_disp
                 energy, iterations = s_new.energy, 0
         rec.add(d, lam * unit, q, energy, iterations, neg, negd)
+        travelled += abs(d - rec.rows["d"][-2])
+        if travelled > WANDER * control.distance:
+            status = _wandering(rec, travelled, control.distance)
+            break
         if it <= target_iterations - 1:
             s = min(1.5 * s, s_max)
         elif it >= target_iterations + 3:
@@ -843,13 +871,40 @@ def _force_turns(rec, F_new, d_new, noise):
     return abs(s2 - s1) > 0.5 * max(abs(s1), abs(s2))
 
 
-def _rig_rescue(monitor, rec):
+def _rewind(rec, rows):
+    """Drop the path rows from ``rows`` on (a branch abandoned)."""
+    for v in rec.rows.values():
+        del v[rows:]
+    for v in rec.fields.values():
+        del v[rows:]
+
+
+def _wandering(rec, travelled, distance):
+    """The status of a path stopped because d went back and forth (see WANDER)."""
+    d = np.asarray(rec.rows["d"])
+    dd = np.diff(d)
+    dd = dd[dd != 0.0]
+    turns = int(np.sum(dd[1:] * dd[:-1] < 0.0))
+    return (f"stopped: the path wanders: the pushed node travelled {travelled / distance:.3g} "
+            f"x the distance, turning back {turns} times between d = {d.min():.6g} and "
+            f"{d.max():.6g} m (branches switched to do not lead to the target); "
+            f"try method='displacement'")
+
+
+def _rig_rescue(monitor, rec, unit=1.0, held=False):
     """When a driver's steps underflow: let the monitor move the push on as a
-    displacement-controlled rig would (`BranchMonitor.rig_onwards`), if it may."""
+    displacement-controlled rig would (`BranchMonitor.rig_onwards`), if it may. A
+    bifurcation found just ahead is added as a path row here (``unit``: N per unit of the
+    states' load factor, in the system's force units; ``held``: the path's own count is
+    the one with the displacement held, as under displacement control)."""
     if monitor is None or monitor.branch != "follow" or monitor.switches >= monitor.max_switches:
         return None
-    reroute = monitor.rig_onwards()
-    if reroute is not None:
+    reroute = monitor.rig_onwards(len(rec.rows["d"]) - 1)
+    if reroute is not None and reroute.new_point:
+        c = reroute.critical  # counted by the monitor's own switch
+        rec.add(c.d, c.lam * unit, c.q, c.energy, 0, c.neg_disp if held else c.neg_force,
+                c.neg_disp)
+    elif reroute is not None:
         monitor.switches += 1
     return reroute
 
@@ -866,4 +921,7 @@ def _monitor_info(info, monitor):
         info["branch_switches"] = monitor.switches
         info["critical_seconds"] = monitor.seconds
         info["rig_jumps"] = list(monitor.rig_jumps)
+        # d (m) of bifurcations whose backward branch MGDC tried and left (it did not
+        # restabilise where d turned); the path jumped on from there as a rig does
+        info["abandoned_branches"] = list(monitor.abandoned)
     return info

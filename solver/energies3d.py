@@ -14,9 +14,12 @@ O'Reilly 2018), each returning its value and writing its exact gradient and Hess
   the frames (t, m1, m2), ``tan(psi / 2) = ((sum_k a_k x b_k) . t_a) / (1 + tr Q)``. This is
   theta_b - theta_a + the reference twist, read off the material frames directly.
 
-Bending and twisting take the 18 frame components ``z = [t_a, m1_a, m2_a, t_b, m1_b, m2_b]``
-as independent variables (gradient (18,), Hessian (18, 18)); `chain_pair` carries them to
-the edges' vectors and twist angles through `solver.frames3d.material_frame_jet`.
+Reference kernels: bending and twisting take the 18 frame components
+``z = [t_a, m1_a, m2_a, t_b, m1_b, m2_b]`` as independent variables (gradient (18,), Hessian
+(18, 18)); `chain_pair` carries them to the edges' vectors and twist angles through
+`solver.frames3d.material_frame_jet`. The assembly uses `pair_terms_edges`, the same energy
+formed straight in the edge coordinates (no 18 x 18 matrix, no allocation; tested equal to
+the reference kernels to round-off and against finite differences).
 """
 
 from __future__ import annotations
@@ -307,16 +310,6 @@ def twist_terms(z, kt, psi_bar, grad, hess):
 
 
 @njit(cache=True)
-def pair_terms(z, k1, k2, kt, kappa1_bar, kappa2_bar, psi_bar, grad, hess, ws):
-    """Bending plus twisting energy (J) of a frame pair ``z`` (18,): `bending_terms` +
-    `twist_terms` in one pass; writes grad (18,), hess (18, 18). ``ws``: `pair_scratch`."""
-    grad[:] = 0.0
-    hess[:, :] = 0.0
-    energy = bending_add(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess, ws)
-    return energy + twist_add(z, kt, psi_bar, grad, hess, ws)
-
-
-@njit(cache=True)
 def pair_frames(val_a, sign_a, val_b, sign_b, z):
     """z (18,) from the two edges' frames [t, m1, m2]; an edge used against its direction
     (sign -1) enters as the proper frame (-t, m1, -m2)."""
@@ -416,6 +409,13 @@ def _p_offset(A):
 
 
 @njit(cache=True, inline="always")
+def _n_cols(A):
+    """Columns of block A's Jacobian that can be non-zero: a tangent (blocks 0, 3) does not
+    depend on the twist angle (its fourth column is exactly zero)."""
+    return 3 if (A == 0 or A == 3) else 4
+
+
+@njit(cache=True, inline="always")
 def _dot_hess(Jz, A, B, coef, M):
     """M[p_A, p_B] += coef J_A^T J_B: one side of J^T d2(z_A . z_B)/dz2 J (the other side
     is M's transpose, added when M is symmetrised)."""
@@ -423,8 +423,8 @@ def _dot_hess(Jz, A, B, coef, M):
     pb = 3 * B
     oa = _p_offset(A)
     ob = _p_offset(B)
-    for r in range(4):
-        for s in range(4):
+    for r in range(_n_cols(A)):
+        for s in range(_n_cols(B)):
             M[oa + r, ob + s] += coef * (Jz[pa, r] * Jz[pb, s] + Jz[pa + 1, r] * Jz[pb + 1, s]
                                          + Jz[pa + 2, r] * Jz[pb + 2, s])
 
@@ -440,13 +440,15 @@ def _cross_hess(Jz, P, Q, v, vo, coef, M, W):
     v0 = v[vo]
     v1 = v[vo + 1]
     v2 = v[vo + 2]
-    for s in range(4):
+    nq = _n_cols(Q)
+    for s in range(nq):
         W[s, 0] = coef * (Jz[pq + 1, s] * v2 - Jz[pq + 2, s] * v1)
         W[s, 1] = coef * (Jz[pq + 2, s] * v0 - Jz[pq, s] * v2)
         W[s, 2] = coef * (Jz[pq, s] * v1 - Jz[pq + 1, s] * v0)
-    for r in range(4):
-        for s in range(4):
-            M[op + r, oq + s] += Jz[pp, r] * W[s, 0] + Jz[pp + 1, r] * W[s, 1] + Jz[pp + 2, r] * W[s, 2]
+    for r in range(_n_cols(P)):
+        for s in range(nq):
+            M[op + r, oq + s] += (Jz[pp, r] * W[s, 0] + Jz[pp + 1, r] * W[s, 1]
+                                  + Jz[pp + 2, r] * W[s, 2])
 
 
 @njit(cache=True, inline="always")

@@ -105,7 +105,7 @@ def frame_jet_scratch():
     return (np.empty(3), np.empty((3, 3)), np.empty((3, 3, 3)), np.empty(3), np.empty((3, 3)),
             np.empty(3), np.empty(3), np.empty((3, 3)), np.empty((3, 3, 3)), np.empty((3, 3)),
             np.empty((3, 3, 3)), np.empty((3, 3, 3)), np.empty(3), np.empty((3, 3)),
-            np.empty((3, 3, 3)))
+            np.empty((3, 3, 3)), np.empty((3, 3)), np.empty(3))
 
 
 @njit(cache=True)
@@ -124,7 +124,7 @@ def material_frame_jet(e, theta, t_src, d_src, val, jac, hess):
 def material_frame_jet_ws(e, theta, t_src, d_src, val, jac, hess, ws):
     """`material_frame_jet` writing its intermediates into ``ws`` (from
     `frame_jet_scratch`): no allocation, for the assembly loop."""
-    t, T1, T2, w, W, u, d, D1, D2, dE, DT, dEE, b, bE, bEE = ws
+    t, T1, T2, w, W, u, d, D1, D2, dE, DT, dEE, b, bE, bEE, om, ga = ws
     ell = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
     inv = 1.0 / ell
     for k in range(3):
@@ -174,14 +174,17 @@ def material_frame_jet_ws(e, theta, t_src, d_src, val, jac, hess, ws):
             cxk = cx0 if k == 0 else (cx1 if k == 1 else cx2)
             D1[k, j] = (t_src[j] * d_src[k] + cxk + W[j, k] * s * A + w[k] * u[j] * A
                         - w[k] * s * A * A * t_src[j])
-    A2 = A * A
+    # D2[k, i, j] = A (W[j, k] (u[i] - A s t_src[i]) + W[i, k] (u[j] - A s t_src[j]))
+    #   - A^2 w[k] (t_src[i] (u[j] - A s t_src[j]) + t_src[j] (u[i] - A s t_src[i]))
+    #   = A (om[j, k] ga[i] + om[i, k] ga[j]), ga = u - A s t_src, om = W - A t_src w^T
+    for i in range(3):
+        ga[i] = u[i] - A * s * t_src[i]
+        for k in range(3):
+            om[i, k] = W[i, k] - A * t_src[i] * w[k]
     for k in range(3):
         for i in range(3):
             for j in range(i, 3):
-                v = (A * (W[j, k] * u[i] + W[i, k] * u[j])
-                     - A2 * s * (W[j, k] * t_src[i] + W[i, k] * t_src[j])
-                     - A2 * w[k] * (u[j] * t_src[i] + u[i] * t_src[j])
-                     + 2.0 * A2 * A * w[k] * s * t_src[i] * t_src[j])
+                v = A * (om[j, k] * ga[i] + om[i, k] * ga[j])
                 D2[k, i, j] = v
                 D2[k, j, i] = v
     # chain to the edge vector: dd/de = D1 T1, d2d/de2 = D1 T2 + T1^T D2 T1
@@ -215,11 +218,11 @@ def material_frame_jet_ws(e, theta, t_src, d_src, val, jac, hess, ws):
         bE[0, i] = (T1[1, i] * d[2] - T1[2, i] * d[1]) + (t[1] * dE[2, i] - t[2] * dE[1, i])
         bE[1, i] = (T1[2, i] * d[0] - T1[0, i] * d[2]) + (t[2] * dE[0, i] - t[0] * dE[2, i])
         bE[2, i] = (T1[0, i] * d[1] - T1[1, i] * d[0]) + (t[0] * dE[1, i] - t[1] * dE[0, i])
-    for i in range(3):
-        for j in range(i, 3):
-            for k in range(3):
-                k1 = (k + 1) % 3
-                k2 = (k + 2) % 3
+    for k in range(3):
+        k1 = (k + 1) % 3
+        k2 = (k + 2) % 3
+        for i in range(3):
+            for j in range(i, 3):
                 v = (T2[k1, i, j] * d[k2] - T2[k2, i, j] * d[k1]
                      + T1[k1, i] * dE[k2, j] - T1[k2, i] * dE[k1, j]
                      + T1[k1, j] * dE[k2, i] - T1[k2, j] * dE[k1, i]
@@ -228,20 +231,28 @@ def material_frame_jet_ws(e, theta, t_src, d_src, val, jac, hess, ws):
                 bEE[k, j, i] = v
     ct = np.cos(theta)
     st = np.sin(theta)
-    jac[:, :] = 0.0
-    hess[:, :, :] = 0.0
     for k in range(3):
         val[k] = t[k]
         val[3 + k] = ct * d[k] + st * b[k]
         val[6 + k] = -st * d[k] + ct * b[k]
+        jac[k, 3] = 0.0  # the tangent does not depend on the twist angle
+        for i in range(4):
+            hess[k, i, 3] = 0.0
+            hess[k, 3, i] = 0.0
         for i in range(3):
             jac[k, i] = T1[k, i]
             jac[3 + k, i] = ct * dE[k, i] + st * bE[k, i]
             jac[6 + k, i] = -st * dE[k, i] + ct * bE[k, i]
-            for j in range(3):
-                hess[k, i, j] = T2[k, i, j]
-                hess[3 + k, i, j] = ct * dEE[k, i, j] + st * bEE[k, i, j]
-                hess[6 + k, i, j] = -st * dEE[k, i, j] + ct * bEE[k, i, j]
+            for j in range(i, 3):
+                h0 = T2[k, i, j]
+                h1 = ct * dEE[k, i, j] + st * bEE[k, i, j]
+                h2 = -st * dEE[k, i, j] + ct * bEE[k, i, j]
+                hess[k, i, j] = h0
+                hess[k, j, i] = h0
+                hess[3 + k, i, j] = h1
+                hess[3 + k, j, i] = h1
+                hess[6 + k, i, j] = h2
+                hess[6 + k, j, i] = h2
     for k in range(3):
         # d m1 / d theta = m2, d m2 / d theta = -m1
         jac[3 + k, 3] = val[6 + k]

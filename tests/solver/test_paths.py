@@ -179,6 +179,92 @@ def test_centre_rotation_free_asymmetric_snap_with_snap_back():
     assert abs(f_m / f_d - 1) < 0.01
 
 
+def travelled(path):
+    """Sum of |dd| along a path, m: the push distance for a path that only advances."""
+    return float(np.sum(np.abs(np.diff(path.displacement))))
+
+
+@pytest.mark.parametrize("h_over_t", [10, 20])
+def test_centre_rotation_free_fix_setup_goes_forward_to_the_target(h_over_t):
+    # The obvious set-up (ends fixed on two nodes, centre held in x only): the symmetric
+    # path stays stable with the displacement held through its force maximum and meets a
+    # subcritical bifurcation at d = 1.39 h, whose branch turns back in d and, unlike
+    # the clamp set-up's, never restabilises: followed back it turned at d = 0.09 h onto
+    # ever less stable branches, 748-20000 steps and F_min down to -13767 EI h / l^3
+    # (issue 12). MGDC now leaves that branch and jumps on from the point as a
+    # displacement-controlled rig does.
+    st, mid, h, EI = arch(h_over_t, 101, "fix", centre=False)
+    mg = st.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
+    st, mid, h, EI = arch(h_over_t, 101, "fix", centre=False)
+    dc = st.push(mid, (0.0, -1.0), 2.2 * h, method="displacement")
+    unit = EI * h / L_SPAN**3
+    for p in (mg, dc):
+        assert p.status == "ok", p.status
+        assert p.displacement[-1] >= 2.2 * h * (1 - 1e-9)
+        assert never_retraces(p, h)
+        assert len(p) < 400
+    # the path goes forward: only short snap-backs near the rejoining point (< 5 % of h)
+    assert travelled(mg) < 2.2 * h * 1.05
+    assert mg.info["abandoned_branches"] and mg.info["rig_jumps"]
+    bif = mg.bifurcations[0]
+    assert bif.switched and abs(bif.d / h - 1.39) < 0.03
+    assert mg.info["abandoned_branches"][0] == bif.d
+    # MGDC and the rig agree on the peak and on the branch they end on; F_min is the
+    # rejoining bifurcation's (a kink), a sane fraction of the peak
+    pk_m = mg.force[first_peak_index(mg.force)]
+    pk_d = dc.force[first_peak_index(dc.force)]
+    assert abs(pk_m / pk_d - 1) < 0.01
+    assert abs(mg.force.min() / pk_m) < 0.3
+    assert abs(mg.force.min() / mg.bifurcations[-1].F - 1) < 1e-3
+    f_m = np.interp(2.1 * h, mg.displacement, mg.force)
+    f_d = np.interp(2.1 * h, dc.displacement, dc.force)
+    assert abs(f_m / f_d - 1) < 0.01
+    # on the stable asymmetric branch right after the jump (as the rig lands)
+    k = int(np.flatnonzero(mg.displacement > bif.d * (1 + 1e-6))[0])
+    assert mg.negative_eigenvalues_displacement[k] == 0 and mg.force[k] / unit > 100.0
+
+
+def test_a_wandering_path_ends_with_a_status_that_says_so(monkeypatch):
+    # Without the check that a backward branch restabilises, MGDC wanders as in issue 12
+    # (d back and forth between 0.1 h and 1.9 h with the force growing without bound);
+    # the wandering guard stops it with a status that says so instead of "ok".
+    from solver.branching import BranchMonitor
+
+    monkeypatch.setattr(BranchMonitor, "excursion_verdict", lambda self, new: None)
+    st, mid, h, EI = arch(20, 101, "fix", centre=False)
+    path = st.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
+    assert path.status.startswith("stopped: the path wanders"), path.status
+    assert "turning back" in path.status
+    assert travelled(path) <= 6.0 * 2.2 * h + np.max(np.abs(np.diff(path.displacement)))
+    assert len(path) < 2000
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", ["mgdc", "displacement"])
+def test_lateral_torsional_buckling_at_201_nodes_is_detected_and_located(method):
+    # 3-D: measured before the driver rework, the 201-node strip ended "ok" on the buckled
+    # branch with no critical point. The bifurcation must be found, located and switched
+    # at the finite-EI2 corrected Prandtl load (0.1 % at 201 nodes).
+    from tests.solver.test_rods3d_validation import ltb_cantilever
+
+    L = 0.1
+    st, rod, EI1, EI2, GJ = ltb_cantilever(201, L)
+    ref = 4.013 / np.sqrt((1 - EI1 / EI2) * (1 - GJ / EI2))
+    d_cr = ref * np.sqrt(EI1 * GJ) / L**2 * L**3 / (3 * EI2)
+    path = st.push(rod.nodes[-1], direction=(0.0, 0.0, -1.0), distance=2.0 * d_cr,
+                   method=method)
+    assert path.status == "ok", path.status
+    bif = path.bifurcations
+    assert len(bif) == 1 and bif[0].located and bif[0].switched
+    assert abs(bif[0].F * L**2 / np.sqrt(EI1 * GJ) / ref - 1) < 1e-3
+    assert path.info["rig_jumps"] == []
+    # planar up to the point, sideways after it, and no state beyond P_cr on the primary
+    y_tip = np.abs(path.positions[:, -1, 1])
+    k = bif[0].index
+    assert np.max(y_tip[: k + 1]) < 1e-9 and y_tip[-1] > 1e-3
+    assert np.max(path.force[: k + 1]) <= bif[0].F * (1 + 1e-6)
+
+
 @pytest.mark.parametrize("method", ["mgdc", "displacement"])
 def test_euler_column_with_clamps(method):
     # clamped-clamped column, one end a sliding clamp: bifurcation at 4 pi^2 EI / L^2
