@@ -248,10 +248,17 @@ class BranchMonitor:
                 reroute = self._rig_switch(a, c, allow_jump=True if repeat else None)
             if reroute is None and not repeat:
                 reroute = self._switch(a, c, phi, eps)
-                if reroute is not None and rig_ok and reroute.state.dir_disp < 0.0:
-                    self.excursion = {"a": a, "c": c, "held_before": a.neg_disp,
-                                      "points": len(self.points)}
-                if reroute is None and rig_ok:  # no other branch found: the rig jumps
+                if reroute is not None and rig_ok:
+                    if reroute.state.dir_disp < 0.0:  # a snap-back, on probation
+                        self.excursion = {"a": a, "c": c, "held_before": a.neg_disp,
+                                          "points": len(self.points)}
+                    elif reroute.state.neg_disp > a.neg_disp:
+                        # onwards in d but less stable than before the point: not a
+                        # snap-back to follow but (Newton on the plane falling back onto
+                        # it) the unstable continuation of the branch just left, or a
+                        # branch no rig holds; the rig jumps instead
+                        reroute = None
+                if reroute is None and rig_ok:
                     reroute = self._rig_switch(a, c, allow_jump=True)
             if reroute is not None:
                 self._switched_at.append(c.q.copy())
@@ -648,19 +655,11 @@ class BranchMonitor:
             a1, a2 = 0.0, 1.0
         t = -a2 * e1 + a1 * e2
         t /= np.linalg.norm(t)
-        ta = (a1 * e1 + a2 * e2) / np.hypot(a1, a2)  # the arriving branch's tangent
         found = []
         for direction in (t, -t):
             state = self._beyond(c, direction, omega, eps)
-            if state is None:
-                continue
-            # Newton on the plane may fall back onto the arriving branch (it crosses the
-            # plane too); such a state lies along ta rather than t, and taking it (it may
-            # well advance d most) would stay on the branch just left
-            dz = np.append(self.system.reduced(state[1]) - uc, omega * (state[2] - c.lam))
-            if abs(float(dz @ t)) <= abs(float(dz @ ta)):
-                continue
-            found.append((state[0], float(direction @ e1), state[1], state[2], direction))
+            if state is not None:
+                found.append((state[0], float(direction @ e1), state[1], state[2], direction))
         if not found:
             return None
         _, _, q, lam, direction = _forward(found, c.d, self.length)
