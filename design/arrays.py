@@ -511,10 +511,16 @@ def snap_unit(model: ArrayModel, positions, i: int, steps: int = 20,
     hold = model.structure(clamp=False, actuator=i, apex_z=False)
     try:
         held, _ = hold.solve_equilibrium(guess, node=None)
-    except ConvergenceError as exc:
-        rec.status = f"not converged: unit {i + 1}: zero-force state (iii) ({exc})"
-        rec.time = time.perf_counter() - t0
-        return Q, rec
+    except ConvergenceError:
+        # Newton from the interpolated state can miss (the bracket spans a curved stretch of
+        # the path): locate F = 0 by regula falsi on displacement-controlled solves first
+        try:
+            near = _zero_force_state(newton, states, d, F, crossed, joint, z0, push_dir, h)
+            held, _ = hold.solve_equilibrium(near, node=None)
+        except ConvergenceError as exc:
+            rec.status = f"not converged: unit {i + 1}: zero-force state (iii) ({exc})"
+            rec.time = time.perf_counter() - t0
+            return Q, rec
     rec.d_zero = float(push_dir @ (held[m.apex] - P[m.apex]))
     rec.held = _to_clamp_frame(model, held)
     # release: actuator and rollers off, the clamp back on the first base edge
@@ -534,6 +540,44 @@ def snap_unit(model: ArrayModel, positions, i: int, steps: int = 20,
     rec.neighbour_change_peak = _shape_changes(model, P, peak, i)
     rec.time = time.perf_counter() - t0
     return Q_new, rec
+
+
+def _zero_force_state(newton, states, d, F, k, joint, z0, push_dir, h, max_steps=40):
+    """A state near F = 0 between path samples k-1 and k (F changes sign there): regula falsi
+    (Illinois) on the apex displacement, each trial a displacement-controlled solve."""
+    from solver import ConvergenceError
+
+    a, b = float(d[k - 1]), float(d[k])
+    Fa, Fb = float(F[k - 1]), float(F[k])
+    Pa, Pb = states[k - 1], states[k]
+    tol = 1e-9 * max(abs(Fa), abs(Fb))
+    best, best_F = (Pa, Fa) if abs(Fa) < abs(Fb) else (Pb, Fb)
+    side = 0
+    for _ in range(max_steps):
+        x = b - Fb * (b - a) / (Fb - Fa)
+        s = (x - a) / (b - a)
+        guess = (1 - s) * Pa + s * Pb
+        guess[joint, 1] = z0 + push_dir[1] * x
+        P, _, _ = newton.solve(guess, max_move=0.25 * h)
+        f = newton.force(joint, push_dir)
+        if abs(f) < abs(best_F):
+            best, best_F = P, f
+        if abs(f) <= tol:
+            break
+        if (f > 0) == (Fb > 0):
+            b, Fb, Pb = x, f, P
+            if side == -1:
+                Fa *= 0.5
+            side = -1
+        else:
+            a, Fa, Pa = x, f, P
+            if side == 1:
+                Fb *= 0.5
+            side = 1
+    else:
+        if abs(best_F) > 1e3 * tol:
+            raise ConvergenceError("the zero-force state was not located")
+    return best
 
 
 def release(model: ArrayModel, positions):

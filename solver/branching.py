@@ -235,7 +235,9 @@ class BranchMonitor:
             # rig; it copes with several modes crossing at once (symmetric structures),
             # which the one-mode tangent plane (`_switch`) cannot. When the rig would
             # jump (the branch through the point turns back in d), MGDC takes the tangent
-            # plane instead and follows the snap-back; displacement control jumps. At a
+            # plane instead and follows the snap-back (on probation until it restabilises,
+            # `excursion_verdict`; a landing onwards in d but less stable than before the
+            # point is no snap-back: the rig jumps); displacement control jumps. At a
             # point switched at before, the tangent plane would loop between branches (a
             # wrong reversal): the rig then moves on, jumping if it must.
             eps = self.switch_size * self.nominal_step
@@ -248,7 +250,8 @@ class BranchMonitor:
                 reroute = self._rig_switch(a, c, allow_jump=True if repeat else None)
             if reroute is None and not repeat:
                 reroute = self._switch(a, c, phi, eps)
-                if reroute is not None and rig_ok:
+                # (displacement control asked the rig to jump already: it keeps this)
+                if reroute is not None and rig_ok and not self.prefer_rig:
                     if reroute.state.dir_disp < 0.0:  # a snap-back, on probation
                         self.excursion = {"a": a, "c": c, "held_before": a.neg_disp,
                                           "points": len(self.points)}
@@ -258,7 +261,7 @@ class BranchMonitor:
                         # it) the unstable continuation of the branch just left, or a
                         # branch no rig holds; the rig jumps instead
                         reroute = None
-                if reroute is None and rig_ok:
+                if reroute is None and rig_ok and not self.prefer_rig:
                     reroute = self._rig_switch(a, c, allow_jump=True)
             if reroute is not None:
                 self._switched_at.append(c.q.copy())

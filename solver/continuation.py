@@ -518,6 +518,7 @@ def follow_displacement(
         target = d + step
         q_try[held] = q0[held] + sign * target
         fmax = max(fscale, abs(rec.rows["F"][-1]) / fu)
+        predicted = system.step_norm(q_try, q)  # m: how far the predictor moved
         it = _newton(system, q_try, 0.0, None, tol * fmax, TOL_DISP * length, max_iter, 0.25 * length)
         if (it >= 0 and monitor is not None and step > CROSSING_REFINE * dd0
                 and monitor.suspicious(system.negative_eigenvalues, 1.0)):
@@ -527,7 +528,11 @@ def follow_displacement(
                 rec, control.force(system) * fu, target, 10 * tol * fmax * fu):
             # refine onto a force extremum or a kink (where branches exchange stability);
             # should a shorter step fail (the point may be singular), the longer one is taken
-            if turn_candidate is None:
+            # (not a state Newton reached only slowly or far from its predictor: that may be
+            # a jump to a far branch, which the turn of F then merely reflects; 401-node
+            # arch, centre free: F = -6e4 EI h / l^3 with status "ok")
+            if (turn_candidate is None and it <= max_iter // 2
+                    and system.step_norm(q_try, q) <= 10.0 * predicted):
                 turn_candidate = (q_try.copy(), target, it)
             dd = step / 2
             continue
@@ -902,6 +907,8 @@ def _rig_rescue(monitor, rec, unit=1.0, held=False):
     reroute = monitor.rig_onwards(len(rec.rows["d"]) - 1)
     if reroute is not None and reroute.new_point:
         c = reroute.critical  # counted by the monitor's own switch
+        if monitor.excursion is not None and "row" not in monitor.excursion:
+            monitor.excursion["row"] = len(rec.rows["d"])
         rec.add(c.d, c.lam * unit, c.q, c.energy, 0, c.neg_disp if held else c.neg_force,
                 c.neg_disp)
     elif reroute is not None:

@@ -224,6 +224,46 @@ def test_centre_rotation_free_fix_setup_goes_forward_to_the_target(h_over_t):
     assert mg.negative_eigenvalues_displacement[k] == 0 and mg.force[k] / unit > 100.0
 
 
+@pytest.mark.parametrize("n_nodes", [101, pytest.param(201, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("setup", ["fix", "clamp"])
+@pytest.mark.parametrize("h_over_t", [6, 10, 20])
+def test_centre_rotation_free_mgdc_goes_forward_and_agrees_with_the_rig(h_over_t, setup,
+                                                                        n_nodes):
+    # The asymmetric-snap family: MGDC may follow short snap-backs (< 5 % of the push
+    # again) but never wanders, never runs on a branch with more than one unstable mode
+    # with d held, and meets the same first peak as the rig. (Before: fix set-up, 101
+    # nodes, 748-20000 steps; clamp set-up, h/t = 6, 201 nodes: a tangent-plane "switch"
+    # that fell back onto the unstable symmetric path, peak 710.5 where the rig sees 534.4.)
+    st, mid, h, EI = arch(h_over_t, n_nodes, setup, centre=False)
+    mg = st.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
+    st, mid, h, EI = arch(h_over_t, n_nodes, setup, centre=False)
+    dc = st.push(mid, (0.0, -1.0), 2.2 * h, method="displacement")
+    for p in (mg, dc):
+        assert p.status == "ok", p.status
+        assert p.displacement[-1] >= 2.2 * h * (1 - 1e-9)
+        assert never_retraces(p, h) and len(p) < 600
+        assert p.negative_eigenvalues_displacement.max() <= 1
+    assert travelled(mg) < 1.05 * mg.displacement[-1]
+    pk_m = mg.force[first_peak_index(mg.force)]
+    pk_d = dc.force[first_peak_index(dc.force)]
+    assert abs(pk_m / pk_d - 1) < 0.01, (pk_m, pk_d)
+
+
+@pytest.mark.slow
+def test_displacement_control_keeps_no_jumped_state_as_a_force_turn():
+    # 401 nodes, fix set-up, centre free, h/t = 20: two steps after its rig jump,
+    # displacement control refined a step across which F "turned" and, its shorter
+    # retries failing, kept that step: a jump (20 Newton iterations) to a far
+    # equilibrium, F_min = -59969 EI h / l^3 with status "ok". MGDC finds -187.
+    st, mid, h, EI = arch(20, 401, "fix", centre=False)
+    dc = st.push(mid, (0.0, -1.0), 2.2 * h, method="displacement")
+    st, mid, h, EI = arch(20, 401, "fix", centre=False)
+    mg = st.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
+    assert dc.status == "ok" and mg.status == "ok"
+    assert abs(dc.force.min() / mg.force.min() - 1) < 0.05, (dc.force.min(), mg.force.min())
+    assert dc.iterations.max() <= 12
+
+
 def test_a_wandering_path_ends_with_a_status_that_says_so(monkeypatch):
     # Without the check that a backward branch restabilises, MGDC wanders as in issue 12
     # (d back and forth between 0.1 h and 1.9 h with the force growing without bound);
