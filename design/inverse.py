@@ -82,6 +82,15 @@ class Design:
     limits: object | None = None
     time: float = 0.0
 
+    def __repr__(self):
+        # short: the arrays (target, predicted, arcs) would print about 10 kB
+        n_arched = sum(not u.is_spacer for u in self.units)
+        met = "" if self.met is None else f", tol {100 * self.tol:.3g} % {'met' if self.met else 'MISSED'}"
+        return (f"Design({n_arched} arched units + {len(self.units) - n_arched} spacers, target "
+                f"{self.target_length * 1e3:.1f} mm, max deviation {100 * self.max_deviation:.3g} % "
+                f"({self.placement_mode}){met}, t={self.t * 1e3:.3g} mm, w={self.w * 1e3:.3g} mm, "
+                f"state {self.state})")
+
     @property
     def joints(self) -> np.ndarray:
         """Unit end points of the predicted array (n + 1, 2), m."""
@@ -248,6 +257,11 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
         raise ValueError(f"min_barrier must be a number (E I_arch / L), got {min_barrier!r}") from None
     if not (math.isfinite(min_barrier) and min_barrier >= 0):
         raise ValueError(f"min_barrier must be >= 0 (E I_arch / L), got {min_barrier!r}")
+    max_controls = _max_controls(max_controls)
+    min_turn_deg = None if min_turn_deg is None else _angle_deg("min_turn_deg", min_turn_deg)
+    merge_deg = _angle_deg("merge_deg", merge_deg)
+    if controls is not None:
+        controls = _controls_x(controls)
     drawn = False  # a curve read from a drawing (SVG, DXF) is taken as drawn, not splined
     if isinstance(points, (str, bytes)) or hasattr(points, "__fspath__"):
         from pathlib import Path
@@ -290,6 +304,12 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
                 f"{i + 1}) for the paper's procedure (controls=..., or theta_convention='paper'): "
                 "a spline y(x) cannot follow a target that folds back; leave controls out for the "
                 "tolerance-driven design of any curve")
+        if controls is not None:
+            x0, x1 = float(pts[0, 0]), float(pts[-1, 0])
+            bad = controls[(controls < x0) | (controls > x1)]
+            if bad.size:
+                raise ValueError(f"controls (x of the control points, m) must lie within the "
+                                 f"target's x range {x0:.6g} to {x1:.6g} m; got {bad[0]:.6g} m")
         design = _spline_design(designer, pts, controls, tol, max_controls)
         design.points = pts
         if refine and theta_convention == "ours":
@@ -340,6 +360,47 @@ def _fraction(name, value) -> float:
         raise ValueError(f"{name} must be a fraction of the target's arc length, 0 < {name} < 1 "
                          f"(0.01 is 1 %), got {value!r}")
     return v
+
+
+def _max_controls(value) -> int:
+    """The control-point budget of the automatic search: an integer >= 3 (it starts with the two
+    ends and the middle)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 3:
+        raise ValueError(f"max_controls (number of control points, the two ends included) must be "
+                         f"an integer >= 3; got {value!r}")
+    return int(value)
+
+
+def _angle_deg(name, value) -> float:
+    """An angle threshold in degrees, 0 <= value < 180."""
+    if isinstance(value, bool):
+        raise ValueError(f"{name} must be an angle in degrees, 0 <= {name} < 180; got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an angle in degrees, 0 <= {name} < 180; got "
+                         f"{value!r}") from None
+    if not (math.isfinite(v) and 0 <= v < 180):
+        raise ValueError(f"{name} must be an angle in degrees, 0 <= {name} < 180; got {value!r}")
+    return v
+
+
+def _controls_x(value) -> np.ndarray:
+    """Interior control x (m), a 1-D sequence of finite numbers."""
+    what = "controls must be the x of the control points in m, a sequence of finite numbers"
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{what}; got {value!r}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what}; got {value!r}") from None
+    if arr.ndim == 0:
+        arr = arr.reshape(1)
+    if arr.ndim != 1:
+        raise ValueError(f"{what} (1-D); got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{what}; got {value!r}")
+    return arr
 
 
 def _choice(name, value, allowed):
@@ -522,7 +583,8 @@ def _spline_design(designer: _Designer, pts, controls, tol, max_controls) -> Des
     if controls is not None:
         xc = np.unique(np.concatenate([[pts[0, 0], pts[-1, 0]], np.asarray(controls, float)]))
         if xc[0] < pts[0, 0] or xc[-1] > pts[-1, 0]:
-            raise ValueError("control x must lie within the target's x range")
+            raise ValueError("controls (x of the control points, m) must lie within the "
+                             "target's x range")
         return design_at(xc)
     return _auto_controls(design_at, target, pts, tol, max_controls)
 

@@ -50,6 +50,14 @@ class Rod:
         """(N-1, 2) bending stiffness of each half edge, N m^2."""
         return self.E * self.width * self.thickness**3 / 12.0
 
+    def __repr__(self):
+        # short: the arrays hold one entry per (half) edge and would print kilobytes
+        n = len(self.nodes)
+        first, last = (int(self.nodes[0]), int(self.nodes[-1])) if n else (0, -1)
+        return (f"Rod(nodes {first}..{last} ({n}), width {np.min(self.width) * 1e3:.4g}.."
+                f"{np.max(self.width) * 1e3:.4g} mm, thickness {np.min(self.thickness) * 1e3:.4g}.."
+                f"{np.max(self.thickness) * 1e3:.4g} mm, E={self.E:.4g} Pa)")
+
 
 def _real(value, name, what):
     """``value`` as a float array, or a ValueError naming the parameter (strings, None,
@@ -160,7 +168,8 @@ class Structure:
             raise ValueError(f"xz must be an (N, 2) array of node positions in m; got shape {xz.shape}")
         n = xz.shape[0]
         if n < 3:
-            raise ValueError(f"a rod needs at least 3 nodes (one bending node); got {n}")
+            raise ValueError(f"xz must hold at least 3 nodes (N >= 3: one bending node) in m; "
+                             f"got {n}")
         if not np.all(np.isfinite(xz)):
             raise ValueError("xz contains NaN or infinite coordinates")
         edges = np.diff(xz, axis=0)
