@@ -206,7 +206,8 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
                    refine: bool | None = None, plot=None, placement: str = "best",
                    L_range=None, hL_range=None, min_barrier: float = 0.5,
                    state: str = "released", max_units: int = 40,
-                   theta_convention: str = "ours", verify: bool = False) -> Design:
+                   theta_convention: str = "ours", verify: bool = False,
+                   progress=None) -> Design:
     """Design an array whose all-snapped base matches a target within `tol` (SI units).
 
     points: the target: (N, 2) points in m in any orientation (N >= 2; a smooth parametric
@@ -241,6 +242,8 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
         by the tolerance-driven one when it misses tol (refine=None) or always (True), never
         with refine=False (the paper's procedure as it is).
     plot: a path: also draw target, predicted (and simulated) shapes there.
+    progress: None or a callable progress(stage) called with "design", "refine" (once per
+        least-squares evaluation), "verify" and "plot" as the work goes on (for a progress bar).
     """
     import warnings
 
@@ -262,6 +265,9 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     merge_deg = _angle_deg("merge_deg", merge_deg)
     if controls is not None:
         controls = _controls_x(controls)
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(stage); got {progress!r}")
+    tick = progress if progress is not None else (lambda stage: None)
     drawn = False  # a curve read from a drawing (SVG, DXF) is taken as drawn, not splined
     if isinstance(points, (str, bytes)) or hasattr(points, "__fspath__"):
         from pathlib import Path
@@ -278,6 +284,8 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     dm = _StateMap(raw, state_kw)
     lookup = MapLookup(_StateMap(raw, state_kw, paper=paper))
     designer = _Designer(lookup, t, w, min_turn_deg, merge_deg, theta_scale=2.0 if paper else 1.0)
+    designer.progress = tick
+    tick("design")
 
     if tangents is not None:
         pts = _finite_control_points(points)
@@ -290,7 +298,8 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
         design = _assess(design, target_xy, dm, state_kw, placement, tol)
         if theta_convention == "ours" and (refine or (refine is None and not design.met)):
             curve = _curve_design(Target.from_polyline(target_xy), t, w, dm, tol, placement,
-                                  L_range, hL_range, min_barrier, state, max_units, lookup)
+                                  L_range, hL_range, min_barrier, state, max_units, lookup,
+                                  progress=tick)
             if curve.max_deviation < design.max_deviation:
                 curve.points = pts
                 design = curve
@@ -318,7 +327,7 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     else:
         target = Target.from_polyline(points) if drawn else Target.from_points(points)
         design = _curve_design(target, t, w, dm, tol, placement, L_range, hL_range, min_barrier,
-                               state, max_units, lookup)
+                               state, max_units, lookup, progress=tick)
         design.points = target.points
     design.state = state_used
     design.theta_convention = theta_convention
@@ -332,12 +341,14 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     if state_used != state:
         design.notes.append(f"the map has no {state} state; used {state_used}")
     if verify:
+        tick("verify")
         verify_design(design)
     if not design.met and theta_convention == "ours":
         warnings.warn(f"tolerance missed: the best design deviates {100 * design.max_deviation:.2f} % "
                       f"of the target length > tol {100 * tol:.2f} % ({placement} placement)",
                       UserWarning, stacklevel=2)
     if plot is not None:
+        tick("plot")
         from design.plots import plot_design
 
         plot_design(design, plot)
@@ -426,6 +437,8 @@ class _Designer:
         self.theta_scale = float(theta_scale)
         self.min_turn = min_turn_deg
         self.merge_deg = float(merge_deg)
+        #: called with "refine" at each least-squares evaluation (a progress bar's tick)
+        self.progress = lambda stage: None
 
     # --- one arc -> units -------------------------------------------------------------------
     def theta_limits(self, L: float):
@@ -545,6 +558,7 @@ class _Designer:
             return out
 
         def residuals(x):
+            self.progress("refine")
             try:
                 xy = chain(build(x), None, source="map", lookup=self.lookup, start=start,
                            start_angle=a0).xy
@@ -1266,8 +1280,9 @@ def verify_design(design: Design, nodes: int | None = None) -> dict:
 
 
 def _curve_design(target: Target, t, w, dm, tol, placement, L_range, hL_range, min_barrier,
-                  state, max_units, lookup) -> Design:
-    """Tolerance-driven design of any planar curve (see `inverse_design`)."""
+                  state, max_units, lookup, progress=None) -> Design:
+    """Tolerance-driven design of any planar curve (see `inverse_design`); progress("layouts")
+    is called once per layout tried."""
     import time
 
     t0 = time.perf_counter()
@@ -1286,6 +1301,8 @@ def _curve_design(target: Target, t, w, dm, tol, placement, L_range, hL_range, m
         if key in seen:
             continue
         seen.add(key)
+        if progress is not None:
+            progress("layouts")
         if sum(1 for s in sides if s) > max_units:
             tried.append((q, len(sides), f"the layout needs {sum(1 for s in sides if s)} arched "
                                          f"units > max_units = {max_units}"))

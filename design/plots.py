@@ -36,20 +36,32 @@ def draw_array(ax, units, xy=None, joints=None, color="C0", label=None):
         ax.plot(joints[:, 0] * 1e3, joints[:, 1] * 1e3, "|", color="k", ms=8, mew=1)
 
 
-def draw_flat(ax, units, y0: float = 0.0):
-    """The unsnapped array in side view: base line and each arch on its side (mm)."""
+def draw_flat(ax, units, y0: float = 0.0, legend: bool = False):
+    """The unsnapped array in side view: base line and each arch on its side (mm); the unit
+    joints as short vertical ticks. legend: add a legend for base, arches and joints."""
     x = 0.0
+    arch_label = "arches (unsnapped, stress free)"
     for i, u in enumerate(units, start=1):
-        ax.plot([x * 1e3, (x + u.L) * 1e3], [y0, y0], "k-", lw=2)
+        ax.plot([x * 1e3, (x + u.L) * 1e3], [y0, y0], "k-", lw=2,
+                label="base strip" if i == 1 else None)
         if not u.is_spacer:
             a = arch_profile(u, 81)
-            ax.plot((x + a[:, 0]) * 1e3, y0 + u.side * a[:, 1] * 1e3, "-", color="C1", lw=1)
+            ax.plot((x + a[:, 0]) * 1e3, y0 + u.side * a[:, 1] * 1e3, "-", color="C1", lw=1,
+                    label=arch_label)
+            arch_label = None
         below = u.side >= 0  # the number on the side without the arch
         ax.text((x + u.L / 2) * 1e3, y0 + (-1 if below else 1) * 0.02 * u.L * 1e3, str(i),
                 ha="center", va="top" if below else "bottom", fontsize=7)
         ax.plot([x * 1e3] * 2, [y0 - 2, y0 + 2], "k-", lw=0.8)
         x += u.L
     ax.plot([x * 1e3] * 2, [y0 - 2, y0 + 2], "k-", lw=0.8)
+    if legend:
+        from matplotlib.lines import Line2D
+
+        handles, _ = ax.get_legend_handles_labels()
+        handles.append(Line2D([], [], color="k", lw=0, marker="|", ms=9, mew=0.8,
+                              label="unit joints (numbers: units)"))
+        ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
 
 
 def plot_design(design, path, title: str | None = None) -> Path:
@@ -102,10 +114,10 @@ def plot_design(design, path, title: str | None = None) -> Path:
     ax.set_ylabel("y (mm)")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.set_title(title or _design_title(design))
-    draw_flat(ax2, design.units)
+    draw_flat(ax2, design.units, legend=True)
     ax2.set_aspect("equal", adjustable="datalim")
-    ax2.set_xlabel("x (mm), undeformed array")
-    ax2.set_yticks([])
+    ax2.set_xlabel("x (mm), undeformed array (flat, as cut)")
+    ax2.set_ylabel("y (mm)")
     return _save(fig, path)
 
 

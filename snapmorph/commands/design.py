@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import argparse
 
+from snapmorph.commands._common import integer, number
+
 HELP = "design an array of units that snaps into a target shape; write units.csv, drawings, plots"
 
 
@@ -49,10 +51,15 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--controls", default=None,
                    help="the paper's procedure: x (mm) of interior control points, comma "
                         "separated (target x increasing)")
-    p.add_argument("--max-controls", type=int, default=9,
-                   help="paper's procedure, automatic control points: at most this many")
-    p.add_argument("--min-turn", type=float, default=None,
-                   help="paper's procedure: arcs turning less (deg) become straight spacers")
+    p.add_argument("--max-controls", type=integer(3, what="control points, the two ends included"),
+                   default=9,
+                   help="paper's procedure, automatic control points: at most this many (>= 3, "
+                        "the two ends included; default %(default)s)")
+    p.add_argument("--min-turn", type=number("deg", 0, 180, low_inclusive=True,
+                                             high_inclusive=False, what="smallest unit turning"),
+                   default=None,
+                   help="paper's procedure: arcs turning less (deg, 0 <= value < 180) become "
+                        "straight spacers")
     p.add_argument("--refine", action="store_true",
                    help="paper's procedure: also refine (L, h) by least squares")
     p.add_argument("--bed", type=float, default=None,
@@ -60,6 +67,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--colours", default=None,
                    help="layer colours as AutoCAD indices, e.g. CUT=1,ENGRAVE=5,MARKS=3")
     p.add_argument("--no-drawings", action="store_true", help="skip DXF/SVG drawings")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (on stderr)")
     p.set_defaults(run=run)
     return p
 
@@ -112,13 +120,29 @@ def run(args) -> int:
                                f"got {args.controls!r}") from None
     if not Path(args.target).is_file():
         raise CommandError(f"target file not found: {args.target}")
+    if args.map is not None and not Path(args.map).is_file():
+        raise CommandError(f"--map {args.map}: design map not found (no such file)")
+    from tqdm import tqdm
+
     from design import inverse_design
     from design.lookup import load_map
     from snapmorph.commands._common import output_dir
 
     dm = load_map(args.map)
     output_dir(args.out)  # before the design: a folder that cannot be written fails at once
-    with warnings.catch_warnings():
+    # one bar for the whole command: it counts the work done (layouts tried, least-squares
+    # evaluations of --refine) and names the stage; the whole-array simulation is one step
+    bar = tqdm(desc="design", unit=" step", leave=False, disable=args.no_progress or None)
+
+    shown = ["design"]
+
+    def progress(stage):
+        if shown[0] != stage:  # (a disabled bar has no desc to compare with)
+            shown[0] = stage
+            bar.set_description_str(stage)
+        bar.update()
+
+    with warnings.catch_warnings(), bar:
         warnings.simplefilter("ignore")  # the summary says it all, once
         d = inverse_design(args.target, t=args.t * 1e-3, w=args.w * 1e-3, controls=controls,
                            design_map=dm, tol=args.tol, max_controls=args.max_controls,
@@ -126,7 +150,7 @@ def run(args) -> int:
                            placement=args.placement, L_range=L_range, hL_range=hL_range,
                            min_barrier=args.min_barrier, state=args.state,
                            max_units=args.max_units, theta_convention=args.theta_convention,
-                           verify=not args.no_verify)
+                           verify=not args.no_verify, progress=progress)
     try:
         written = d.write(args.out, bed_length_mm=args.bed, colours=colours,
                           drawings=not args.no_drawings)
