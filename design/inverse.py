@@ -677,13 +677,13 @@ def _angles(tangents, n: int) -> np.ndarray:
         raise ValueError("tangents must be numbers: degrees (N,) or vectors (N, 2)") from None
     if a.ndim == 2 and a.shape == (n, 2):
         if not np.all(np.isfinite(a)) or np.any(np.hypot(*a.T) == 0):
-            raise ValueError("tangent vectors must be finite and non-zero")
+            raise ValueError("tangents given as vectors (N, 2) must be finite and non-zero")
         return np.unwrap(np.arctan2(a[:, 1], a[:, 0]))
     if a.shape != (n,):
         raise ValueError(f"tangents must be one angle (degrees) or vector per control point "
                          f"({n}), got shape {a.shape}")
     if not np.all(np.isfinite(a)):
-        raise ValueError("tangent angles must be finite (no NaN)")
+        raise ValueError(f"tangents must be finite angles in degrees (no NaN); got {tangents!r}")
     return np.unwrap(np.radians(a))  # 170°, -170° is a 20° turn, not 340°
 
 

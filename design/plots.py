@@ -60,7 +60,7 @@ def draw_flat(ax, units, y0: float = 0.0, legend: bool = False):
 
         handles, _ = ax.get_legend_handles_labels()
         handles.append(Line2D([], [], color="k", lw=0, marker="|", ms=9, mew=0.8,
-                              label="unit joints (numbers: units)"))
+                              label="unit joints (numbers: unit index)"))
         ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
 
 

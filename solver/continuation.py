@@ -37,6 +37,13 @@ CROSSING_REFINE = 1.0 / 256.0
 # with a "stopped: the path wanders" status (a snap-back adds its own return only).
 WANDER = 6.0
 
+# Along a displacement-controlled equilibrium path dE/dd = F, so over a step the energy
+# change must match the trapezoidal work 0.5 (F_k + F_k+1) dd to within this fraction of
+# |dE| + fscale dd (smooth steps of the arch: <= 0.05; a step across a kink: 0.15; a
+# jump to a far state: ~1). A step that misses it is retried smaller; one that still
+# misses it at the smallest step is a real jump (see `_work_mismatch`).
+WORK_TOL = 0.1
+
 # A push may not ask for more than this times the structure's size (its largest extent): a
 # node of a held structure cannot move that far without stretching its rods several-fold.
 MAX_DISTANCE = 10.0
@@ -504,6 +511,7 @@ def follow_displacement(
     status = "ok"
     sign = control.direction[axis]
     turn_candidate = None
+    energy_jumps = []  # d (m) of steps accepted as snaps by the work check
     while d < control.distance * (1 - 1e-12):
         if len(rec.rows["d"]) > max_steps:
             status = f"stopped: more than {max_steps} steps"
@@ -520,6 +528,23 @@ def follow_displacement(
         fmax = max(fscale, abs(rec.rows["F"][-1]) / fu)
         predicted = system.step_norm(q_try, q)  # m: how far the predictor moved
         it = _newton(system, q_try, 0.0, None, tol * fmax, TOL_DISP * length, max_iter, 0.25 * length)
+        if it >= 0:
+            E_k, F_k = rec.rows["E"][-1] / fu, rec.rows["F"][-1] / fu
+            gap, allowed = _work_mismatch(E_k, system.energy, F_k, control.force(system),
+                                          step, fscale)
+            if gap > WORK_TOL:  # Newton went to a far state, not along the path
+                if step / 2 >= o["min_step_ratio"] * dd0:
+                    dd = step / 2
+                    continue
+                if not allowed:  # no snap: it would need energy the push did not supply
+                    status = (
+                        f"stopped: energy jump: displacement control reached a state at "
+                        f"d = {target:.6g} m whose energy exceeds the last one by more than "
+                        f"the work of the push however small the step (a jump to a far "
+                        f"branch, not a snap; use method='mgdc')"
+                    )
+                    break
+                energy_jumps.append(target)  # a real snap: it releases energy
         if (it >= 0 and monitor is not None and step > CROSSING_REFINE * dd0
                 and monitor.suspicious(system.negative_eigenvalues, 1.0)):
             dd = step / 2  # refine a step across which the count changes
@@ -589,7 +614,8 @@ def follow_displacement(
             dd = min(1.5 * dd, dd_max)
         if stop is not None and stop(rec.rows):
             break
-    info = {"wall_time": time.perf_counter() - t0, "bandwidth": system.bandwidth, "n_dofs": system.n}
+    info = {"wall_time": time.perf_counter() - t0, "bandwidth": system.bandwidth, "n_dofs": system.n,
+            "energy_jumps": energy_jumps}
     return rec.path(status, "displacement", _monitor_info(info, monitor),
                     monitor.points if monitor is not None else ())
 
@@ -874,6 +900,20 @@ def _force_turns(rec, F_new, d_new, noise):
         return True
     s1, s2 = before / (d[-1] - d[-2]), after / (d_new - d[-1])
     return abs(s2 - s1) > 0.5 * max(abs(s1), abs(s2))
+
+
+def _work_mismatch(E0, E1, F0, F1, dd, fscale):
+    """Energy balance of a displacement-controlled step of dd m from energy E0 to E1 (J)
+    with forces F0, F1 (N) along the push: along an equilibrium path dE/dd = F, so
+    E1 - E0 = 0.5 (F0 + F1) dd up to the trapezoid's error. Returns (gap, allowed): gap is
+    |E1 - E0 - work| / (|E1 - E0| + fscale dd) (fscale N: the structure's force scale);
+    allowed says whether the energy rose no more than the work supplied (within WORK_TOL
+    of that scale): a physical snap releases energy, a jump that gains it is no snap."""
+    work = 0.5 * (F0 + F1) * dd
+    dE = E1 - E0
+    scale = abs(dE) + fscale * dd
+    gap = abs(dE - work) / scale if scale > 0.0 else 0.0
+    return gap, dE <= work + WORK_TOL * fscale * dd
 
 
 def _rewind(rec, rows):
