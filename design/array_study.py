@@ -176,6 +176,12 @@ class ArrayStudy:
     neighbour_change_peak: float  # m, the same at the actuator's peak force
     times: dict = field(default_factory=dict)
 
+    def __repr__(self):
+        bad = sum(r.status != "ok" for r in self.rows)
+        worst = max((r.dev_fk for r in self.rows if np.isfinite(r.dev_fk)), default=float("nan"))
+        return (f"ArrayStudy({self.name!r}: {len(self.units)} units, {len(self.rows)} states, "
+                f"{bad} not ok, largest deviation from FK {worst:.2e} of the length)")
+
     @property
     def ok(self) -> bool:
         return all(r.status == "ok" for r in self.rows) and all(

@@ -281,6 +281,10 @@ class SnapRecord:
     time: float = 0.0
     status: str = "ok"
 
+    def __repr__(self):
+        return (f"SnapRecord(unit {self.unit}, {self.status!r}, F_cr={self.F_cr:.4g} N, "
+                f"turn {self.turn_deg:.3f} deg, {self.steps} steps, {self.time:.2f} s)")
+
 
 @dataclass
 class ArrayResult:
@@ -302,6 +306,14 @@ class ArrayResult:
     snaps: list = field(default_factory=list)
     model: ArrayModel | None = None
     time: float = 0.0
+
+    def __repr__(self):
+        # the arrays run to tens of kB: a summary a person can read instead
+        n = len(self.units)
+        length = float(np.sum(np.hypot(*np.diff(self.base, axis=0).T))) if len(self.base) > 1 else 0.0
+        return (f"ArrayResult({n} units, state {self.state!r}, status {self.status!r}, "
+                f"base {len(self.base)} points over {length * 1e3:.1f} mm, "
+                f"{len(self.snaps)} snaps, {self.time:.2f} s)")
 
     @property
     def unit_bases(self) -> list:

@@ -64,6 +64,46 @@ def check_state(state) -> str:
     return state
 
 
+#: what each query parameter is (for error messages)
+_MEANING = {"h_over_L": "arch apex height over base length, dimensionless",
+            "t_over_L": "sheet thickness over base length, dimensionless",
+            "w_over_L": "strip width over base length, dimensionless",
+            "theta_deg": "signed turning angle theta, degrees",
+            "theta_end_deg": "end angle theta_end (end tangent to chord), degrees"}
+
+
+def _real_array(name: str, value) -> np.ndarray:
+    """``value`` (a number or an array of numbers) as a float array, or ValueError naming
+    ``name``, what it is and its unit. Strings, None, booleans and complex numbers are refused;
+    NaN passes (the range checks name it)."""
+    what = f"{name} ({_MEANING.get(name, name)})"
+    if value is None or isinstance(value, (str, bytes, bool, np.bool_)):
+        raise ValueError(f"{what} must be a real number or an array of real numbers; "
+                         f"got {value!r}")
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged lists
+        raise ValueError(f"{what} must be a real number or an array of real numbers; "
+                         f"got {value!r} ({exc})") from None
+    if raw.dtype.kind == "c":
+        raise ValueError(f"{what} must be real, not complex; got {value!r}")
+    if raw.dtype.kind not in "iuf":
+        raise ValueError(f"{what} must be a real number or an array of real numbers; "
+                         f"got {value!r}")
+    return np.asarray(value, dtype=float)
+
+
+def _broadcast(**named):
+    """Broadcast the named query arrays, or ValueError naming them and their shapes."""
+    arrays = [_real_array(name, v) for name, v in named.items()]
+    try:
+        return np.broadcast_arrays(*arrays)
+    except ValueError:
+        shapes = ", ".join(f"{name} {a.shape}" for name, a in zip(named, arrays))
+        raise ValueError(f"{', '.join(named)} must broadcast to one shape (scalars, or arrays of "
+                         f"equal or broadcastable shapes); got shapes {shapes}") from None
+
+
 def _fail(path, problem):
     raise MapFileError(f"design map {path}: {problem}")
 
@@ -270,7 +310,7 @@ class DesignMap:
     # ---------------------------------------------------------------- lookup
     def _points(self, h_over_L, t_over_L, w_over_L):
         """Broadcast, range-check and transform queries; returns (shape, (n, 3) array)."""
-        h, t, w = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (h_over_L, t_over_L, w_over_L)))
+        h, t, w = _broadcast(h_over_L=h_over_L, t_over_L=t_over_L, w_over_L=w_over_L)
         for name, v, axis in zip(GRID_DIMS, (h, t, w), self._axes):
             lo, hi = axis[0], axis[-1]
             tol = _R_TOL * (hi - lo)
@@ -393,9 +433,11 @@ class DesignMap:
                       allow_nan: bool = False):
         """Critical force F_cr in N for Young's modulus E (Pa) and base length L (m):
         F_cr = F_norm E I_arch / L^2 with I_arch = w t^3 / 12."""
-        for name, v in (("E", E), ("L", L)):
-            if not (isinstance(v, (int, float, np.floating, np.integer)) and np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a finite number > 0, got {v!r}")
+        for name, v, what in (("E", E, "Young's modulus, Pa"), ("L", L, "base length, m")):
+            if (isinstance(v, (bool, np.bool_))
+                    or not (isinstance(v, (int, float, np.floating, np.integer))
+                            and np.isfinite(v) and v > 0)):
+                raise ValueError(f"{name} must be a finite number > 0 ({what}), got {v!r}")
         f = self.value("F_cr", h_over_L, t_over_L, w_over_L, allow_nan=allow_nan)
         t = np.asarray(t_over_L, float) * L
         w = np.asarray(w_over_L, float) * L
@@ -405,8 +447,8 @@ class DesignMap:
     def _theta_column(self, t_over_L, w_over_L, state="released", angle="theta"):
         """``angle`` (theta or theta_end, deg) at every grid h/L for one (t, w), NaN where
         undefined."""
-        t = float(t_over_L)
-        w = float(w_over_L)
+        t = float(self._one("t_over_L", t_over_L))
+        w = float(self._one("w_over_L", w_over_L))
         h = self._axes[0]
         th = self.value(angle, h, np.full_like(h, t), np.full_like(h, w), allow_nan=True,
                         state=state)
@@ -427,6 +469,15 @@ class DesignMap:
             else:
                 i += 1
         return h, th, runs
+
+    @staticmethod
+    def _one(name, value) -> float:
+        """One real number (see `_real_array`), or ValueError naming ``name``."""
+        v = _real_array(name, value)
+        if v.size != 1:
+            raise ValueError(f"{name} ({_MEANING[name]}) must be one number here; got an array "
+                             f"of shape {v.shape}")
+        return float(v.reshape(-1)[0])
 
     def _where(self, t_over_L, w_over_L, state="released"):
         return f"t/L={float(t_over_L):g}, w/L={float(w_over_L):g} ({state} state)"
@@ -474,7 +525,9 @@ class DesignMap:
 
         state = self._state(state)
         angle = self._check_angle(angle)
-        th_q, t_q, w_q = np.broadcast_arrays(*(np.asarray(v, float) for v in (theta_deg, t_over_L, w_over_L)))
+        name = f"{angle}_deg"
+        th_q, t_q, w_q = _broadcast(**{name: theta_deg, "t_over_L": t_over_L,
+                                       "w_over_L": w_over_L})
         out = np.empty(th_q.shape)
         for k in np.ndindex(th_q.shape):
             target, t, w = float(th_q[k]), float(t_q[k]), float(w_q[k])
@@ -484,7 +537,7 @@ class DesignMap:
             if not runs:
                 raise MapDomainError(f"no bistable unit in the map at {where}")
             if not np.isfinite(target):
-                raise ValueError(f"{angle}_deg must be finite, got {target!r}")
+                raise ValueError(f"{name} ({_MEANING[name]}) must be finite, got {target!r}")
             found = None
             for i0, i1 in runs:
                 if i0 == i1:
@@ -508,6 +561,7 @@ class DesignMap:
             if found is None:
                 spans = "; ".join(f"{np.nanmin(th[i0:i1 + 1]):.4g} to {np.nanmax(th[i0:i1 + 1]):.4g} deg "
                                   f"(h/L {h[i0]:g} to {h[i1]:g})" for i0, i1 in runs)
-                raise MapDomainError(f"{angle} = {target:g} deg is outside the range reachable at {where}: {spans}")
+                raise MapDomainError(f"{name} out of reach: {angle} = {target:g} deg is outside "
+                                     f"the range reachable at {where}: {spans}")
             out[k] = found
         return self._scalar(out)

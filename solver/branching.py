@@ -91,11 +91,15 @@ class BranchMonitor:
     first needed; ``nominal_step`` (m): the driver's first-step size, displacement norm;
     ``switch_size``: the perturbation as a fraction of it; ``load_unit`` (N): the force of
     a unit load factor (states carry lam = F / load_unit; critical points record F in N).
+    ``driver_system``: the system the driver steps with (default ``system``); the monitor's
+    own systems that are not it are carried along to every state observed (`accept`), so
+    3-D reference frames stay in step with the driver's (planar rods: a no-op).
     """
 
     def __init__(self, structure, control, branch, tol, fscale, length, nominal_step,
                  system=None, switch_size=0.5, max_switches=8, max_iter=25, load_unit=1.0,
-                 rig_step=None, prefer_rig=False, driver_max_iter=25, force_unit=1.0):
+                 rig_step=None, prefer_rig=False, driver_max_iter=25, force_unit=1.0,
+                 driver_system=None):
         if branch not in BRANCHES:
             raise ValueError(f"branch must be one of {BRANCHES}; got {branch!r}")
         self.structure = structure
@@ -122,6 +126,7 @@ class BranchMonitor:
         self.excursion: dict | None = None
         self.abandoned: list[float] = []  # d (m) of points whose backward branch was left
         self._system = system
+        self.driver_system = system if driver_system is None else driver_system
         self._P = None
         self.points: list[CriticalPoint] = []
         self.history: list[PathState] = []
@@ -148,6 +153,13 @@ class BranchMonitor:
     def start(self, state: PathState):
         self.history = [state]
 
+    def _accept(self, q):
+        """Carry the monitor's own systems (not the driver's, which the driver carries) to
+        the state q, as the driver does with its system after every accepted state."""
+        for system in (self._system, self._held):
+            if system is not None and system is not self.driver_system:
+                system.accept(q)
+
     # ------------------------------------------------------------------ per step
     def suspicious(self, neg_disp, dir_disp) -> bool:
         """Would a state with these values put a bifurcation (or a fold that a long step
@@ -159,6 +171,7 @@ class BranchMonitor:
 
         Returns a `Reroute` when the path should continue on another branch."""
         prev = self.history[-1]
+        self._accept(new.q)
         if new.dir_force == 0.0:  # read off the sequence (displacement control)
             new.dir_force = float(np.sign(new.lam - prev.lam))
         if prev.dir_force * new.dir_force < 0.0:
@@ -175,6 +188,7 @@ class BranchMonitor:
             self.history = self.history[-1:] + [new]
         else:
             self.history = [reroute.critical, reroute.state]
+            self._accept(reroute.state.q)  # the driver goes on from there
         return reroute
 
     def _record_limit(self, control, index, new):
@@ -457,6 +471,13 @@ class BranchMonitor:
         return self._held
 
     def rig_onwards(self, index=None):
+        """See `_rig_onwards`; the monitor's own systems are carried to the new state."""
+        reroute = self._rig_onwards(index)
+        if reroute is not None:
+            self._accept(reroute.state.q)
+        return reroute
+
+    def _rig_onwards(self, index=None):
         """The driver is stuck at its last state (its steps shrank to nothing, e.g. at a
         point where several branches meet and a limit point coincides, at a snap-back
         under displacement control, or right at a bifurcation that load control cannot

@@ -500,7 +500,8 @@ def follow_displacement(
                                 nominal_step=control.distance / steps,
                                 switch_size=o["switch_size"], max_switches=o["max_switches"],
                                 load_unit=unit, rig_step=o["switch_size"] * control.distance / steps,
-                                prefer_rig=True, driver_max_iter=max_iter, force_unit=fu)
+                                prefer_rig=True, driver_max_iter=max_iter, force_unit=fu,
+                                driver_system=system)
         monitor.start(PathState(q.copy(), 0.0, 0.0, -1, system.negative_eigenvalues, 0.0, 1.0,
                                 system.energy))
     dd0 = control.distance / steps

@@ -53,6 +53,23 @@ def _fmt(value, scale=1.0, digits=4):
     return f"{value * scale:.{digits}g}"
 
 
+# geometry_problem's messages start with the parameter(s) at fault: the options to name
+_SUBJECT_OPTIONS = (("b + w", "--b, --w"), ("joint_length", "--joint-length"),
+                    ("bond_length", "--bond-length"), ("L", "--L"), ("h", "--h"), ("t", "--t"),
+                    ("w", "--w"), ("b", "--b"), ("E", "--E"))
+
+
+def _domain_message(problem: str) -> str:
+    """A `geometry_problem` message (quoting mm) as one line naming the option(s) at fault,
+    argparse style: "argument --h: h must be <= ... mm; got ..."."""
+    text = problem.replace("joint_length", "--joint-length").replace("bond_length", "--bond-length")
+    for subject, options in _SUBJECT_OPTIONS:
+        if problem == subject or problem.startswith(subject + " "):
+            word = "arguments" if "," in options else "argument"
+            return f"{word} {options}: {text}"
+    return text
+
+
 def run(args: argparse.Namespace) -> int:
     import json
     import math
@@ -68,8 +85,7 @@ def run(args: argparse.Namespace) -> int:
     # the model's valid domain, checked here so that the message quotes millimetres
     problem = geometry_problem(**dims, unit="mm", scale=1e3)
     if problem:
-        raise CommandError(problem.replace("joint_length", "--joint-length")
-                           .replace("bond_length", "--bond-length"))
+        raise CommandError(_domain_message(problem))
     json_path = output_file(args.json, "--json") if args.json else None
     plot_path = plot_file(args.plot, "--plot") if args.plot else None
 

@@ -71,9 +71,9 @@ CASES = [
     pytest.param(lambda tmp: _unit_result(), id="UnitResult"),
     pytest.param(lambda tmp: _design_map(tmp), id="DesignMap"),
     pytest.param(lambda tmp: _unit(), id="design.Unit"),
-    pytest.param(lambda tmp: _rod(), id="solver.Rod", marks=_open("solver/structure.py")),
+    pytest.param(lambda tmp: _rod(), id="solver.Rod"),
     pytest.param(_chain, id="design.Chain", marks=_open("design/kinematics.py")),
-    pytest.param(lambda tmp: _array_result(), id="ArrayResult", marks=_open("design/arrays.py")),
+    pytest.param(lambda tmp: _array_result(), id="ArrayResult"),
 ]
 
 

@@ -546,8 +546,6 @@ def test_displacement_control_keeps_no_step_that_breaks_the_energy_balance(h_ove
     # and the lowest force is where the rig leaves the stable branch: the fold in d that
     # MGDC passes before it runs back (unstable with d held, which no rig can hold) to the
     # rejoining point, MGDC's own F_min.
-    from solver.continuation import WORK_TOL
-
     st, mid, h, EI = arch(h_over_t, 401, "fix", centre=False)
     dc = st.push(mid, (0.0, -1.0), 2.2 * h, method="displacement")
     st, mid, h, EI = arch(h_over_t, 401, "fix", centre=False)
@@ -555,7 +553,7 @@ def test_displacement_control_keeps_no_step_that_breaks_the_energy_balance(h_ove
     assert dc.status == "ok" and mg.status == "ok", (dc.status, mg.status)
     assert dc.displacement[-1] >= 2.2 * h * (1 - 1e-9)
     newton = dc.iterations[1:] > 0  # not a rig move (iterations 0)
-    assert np.all(_work_gaps(dc, st)[newton] <= WORK_TOL)
+    assert np.all(_work_gaps(dc, st)[newton] <= 0.1)  # smooth steps: <= 0.05
     unit = EI * h / L_SPAN**3
     pk = dc.force[first_peak_index(dc.force)]
     assert abs(dc.force.min() / pk) < 0.5 and dc.iterations.max() <= 12
