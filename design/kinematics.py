@@ -39,6 +39,7 @@ def chain(units, snapped, source: str = "map", lookup: MapLookup | None = None,
     """Place the units' base shapes end to end, from `start` (m) heading `start_angle` (rad);
     snapped units in ``state`` ("released" by default, or "actuated")."""
     units, snapped = _check(units, snapped)
+    _check_start(start, start_angle)
     if state is not None:
         kw["state"] = check_state(state)
     if source == "map" and lookup is None and any(s and not u.is_spacer
@@ -50,9 +51,9 @@ def chain(units, snapped, source: str = "map", lookup: MapLookup | None = None,
 
 
 def place(shapes: list[UnitShape], start=(0.0, 0.0), start_angle: float = 0.0) -> Chain:
-    """Concatenate unit-frame shapes, matching end points and end tangents."""
-    pos = np.array(start, dtype=float)
-    ang = float(start_angle)
+    """Concatenate unit-frame shapes, matching end points and end tangents; from `start` (m)
+    heading `start_angle` (rad)."""
+    pos, ang = _check_start(start, start_angle)
     pieces, joints, angles = [], [pos.copy()], [ang]
     for shape in shapes:
         c, s = math.cos(ang), math.sin(ang)
@@ -129,10 +130,58 @@ def all_states(units, source: str = "map", design_map=None, chains: bool = False
 
 
 def _check(units, snapped):
-    units = list(units)
+    """(list of units, list of snapped flags), or ValueError naming `units` or `snapped`."""
+    if units is None or isinstance(units, (str, bytes, Unit)):
+        raise ValueError(f"units must be a sequence of design.Unit (the array's units, in "
+                         f"order; at least one); got {units!r}")
+    try:
+        units = list(units)
+    except TypeError:
+        raise ValueError(f"units must be a sequence of design.Unit (the array's units, in "
+                         f"order; at least one); got {units!r}") from None
     if not units:
-        raise ValueError("an array needs at least one unit")
+        raise ValueError("units must hold at least one design.Unit (an array needs at least one "
+                         "unit); got an empty sequence")
     for i, u in enumerate(units):
         if not isinstance(u, Unit):
             raise ValueError(f"unit {i + 1} is not a design.Unit: {u!r}")
-    return units, parse_state(snapped, len(units))
+    flags = parse_state(snapped, len(units))
+    if snapped is not None:  # None: every arched unit snapped (a spacer has one state only)
+        for i, (u, f) in enumerate(zip(units, flags)):
+            if f and u.is_spacer:
+                raise ValueError(f"snapped: unit {i + 1} is a spacer (h = 0, one state only) and "
+                                 f"cannot be snapped; give 0 (or False) for it; got {snapped!r}")
+    return units, flags
+
+
+def _check_start(start, start_angle):
+    """(start as a float array (2,) in m, start_angle as a float in rad), or ValueError
+    naming the parameter, its unit and what is valid."""
+    bad = (f"start (the array's first joint (x, y), m) must be two finite real numbers; "
+           f"got {start!r}")
+    if start is None or isinstance(start, (str, bytes)):
+        raise ValueError(bad)
+    try:
+        raw = np.asarray(start)
+    except (TypeError, ValueError):
+        raise ValueError(bad) from None
+    if raw.shape != (2,) or raw.dtype.kind not in "iufO":
+        raise ValueError(bad)
+    try:
+        pos = np.array(start, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(bad) from None
+    if not np.all(np.isfinite(pos)):
+        raise ValueError(bad)
+    bad = (f"start_angle (heading of the first unit's base, rad, counter-clockwise from +x) "
+           f"must be a finite real number; got {start_angle!r}")
+    if start_angle is None or isinstance(start_angle, (str, bytes, bool, np.bool_, complex,
+                                                       np.complexfloating)):
+        raise ValueError(bad)
+    try:
+        ang = float(start_angle)
+    except (TypeError, ValueError):
+        raise ValueError(bad) from None
+    if not math.isfinite(ang):
+        raise ValueError(bad)
+    return pos, ang

@@ -87,10 +87,14 @@ def _real_array(name: str, value) -> np.ndarray:
                          f"got {value!r} ({exc})") from None
     if raw.dtype.kind == "c":
         raise ValueError(f"{what} must be real, not complex; got {value!r}")
-    if raw.dtype.kind not in "iuf":
+    if raw.dtype.kind not in "iufO":
         raise ValueError(f"{what} must be a real number or an array of real numbers; "
                          f"got {value!r}")
-    return np.asarray(value, dtype=float)
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):  # an object array holding text, complex numbers, ...
+        raise ValueError(f"{what} must be a real number or an array of real numbers; "
+                         f"got {value!r}") from None
 
 
 def _broadcast(**named):

@@ -39,9 +39,10 @@ WANDER = 6.0
 
 # Along a displacement-controlled equilibrium path dE/dd = F, so over a step the energy
 # change must match the trapezoidal work 0.5 (F_k + F_k+1) dd to within this fraction of
-# |dE| + fscale dd (smooth steps of the arch: <= 0.05; a step across a kink: 0.15; a
-# jump to a far state: ~1). A step that misses it is retried smaller; one that still
-# misses it at the smallest step is a real jump (see `_work_mismatch`).
+# |dE| + fscale dd (smooth steps of the arch: <= 0.05, up to 0.09 just after a rig jump;
+# a step over the fold where the stable branch ends: 0.15; a jump to a far state: 0.65-1).
+# A step that misses it is retried smaller; one that still misses it at the smallest step
+# is a real jump (see `_work_mismatch`).
 WORK_TOL = 0.1
 
 # A push may not ask for more than this times the structure's size (its largest extent): a
