@@ -33,6 +33,12 @@ class Chain:
     joints: np.ndarray
     angles: np.ndarray
 
+    def __repr__(self):
+        end = self.joints[-1]
+        turn = float(np.degrees(self.angles[-1] - self.angles[0]))
+        return (f"Chain({len(self.pieces)} units, {len(self.xy)} points, end at "
+                f"({end[0] * 1e3:.2f}, {end[1] * 1e3:.2f}) mm, total turning {turn:.2f} deg)")
+
 
 def chain(units, snapped, source: str = "map", lookup: MapLookup | None = None,
           start=(0.0, 0.0), start_angle: float = 0.0, state: str | None = None, **kw) -> Chain:

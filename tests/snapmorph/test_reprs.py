@@ -62,17 +62,13 @@ def _array_result():
     return simulate_array([_unit(), _unit()], "10", nodes=41)
 
 
-def _open(owner):
-    return pytest.mark.xfail(strict=True, reason=f"repr still long; owner: {owner}")
-
-
 CASES = [
     pytest.param(lambda tmp: _path(), id="solver.Path"),
     pytest.param(lambda tmp: _unit_result(), id="UnitResult"),
     pytest.param(lambda tmp: _design_map(tmp), id="DesignMap"),
     pytest.param(lambda tmp: _unit(), id="design.Unit"),
     pytest.param(lambda tmp: _rod(), id="solver.Rod"),
-    pytest.param(_chain, id="design.Chain", marks=_open("design/kinematics.py")),
+    pytest.param(_chain, id="design.Chain"),
     pytest.param(lambda tmp: _array_result(), id="ArrayResult"),
 ]
 

@@ -150,6 +150,30 @@ def test_large_b_units_are_never_bistable_with_an_unstable_second_state(kw):
         assert math.isnan(r.S) and math.isnan(r.theta_deg)
 
 
+def test_an_unstable_second_state_is_reported_as_such(monkeypatch):
+    """No geometry found after the issue-12 driver rework keeps a state (iii) with negative
+    eigenvalues, so the reporting is checked by making the stability check of state (iii)
+    see two: the unit must then be "second state unstable", not bistable, with no S or θ."""
+    import units.planar as planar
+    from solver.stability import StateStability
+
+    real = planar._state_stability
+    calls = []
+
+    def second_unstable(st, model, positions, system):
+        calls.append(1)
+        s = real(st, model, positions, system)
+        return StateStability(2, 2) if len(calls) == 2 else s  # (ii) real, (iii) unstable
+
+    monkeypatch.setattr(planar, "_state_stability", second_unstable)
+    r = simulate_unit(UnitGeometry(**PAPER), critical=False, check_self_standing=False)
+    assert r.status.startswith("second state unstable"), r.status
+    assert r.status_code == STATUS_CODES["second_state_unstable"] == 5
+    assert not r.bistable and math.isnan(r.S) and math.isnan(r.theta_deg)
+    assert "negative eigenvalue" in r.reason
+    assert np.isfinite(r.F_cr)
+
+
 def test_bistable_units_have_a_stable_second_state(paper):
     assert paper.bistable and paper.stability["states"]["iii"].negative_force == 0
     # also without the per-step critical-point machinery
