@@ -1,6 +1,5 @@
 """Short reprs: printing a result in a notebook or a log shows a summary line, not kilobytes of
-arrays (issue 15). Objects whose repr is still long are listed as xfail(strict=True) with the
-module that owns them, so a fix shows up as an XPASS failure until the mark is removed."""
+arrays (issue 15)."""
 
 from __future__ import annotations
 
