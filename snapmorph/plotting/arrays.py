@@ -8,27 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
+# one Agg set-up and one way of saving for every figure of the project
+from design.plots import _plt, _save
+
 #: Okabe-Ito colours (safe for the common colour-vision deficiencies).
 OKABE_ITO = {"blue": "#0072B2", "orange": "#E69F00", "green": "#009E73", "vermillion": "#D55E00",
              "sky": "#56B4E9", "purple": "#CC79A7", "yellow": "#F0E442", "black": "#000000",
              "grey": "#999999"}
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(fig, path) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=150, bbox_inches="tight")
-    _plt().close(fig)
-    return path
 
 
 def transform(xy, placement):
