@@ -513,6 +513,7 @@ def follow_displacement(
     status = "ok"
     sign = control.direction[axis]
     turn_candidate = None
+    snap_candidate = None  # first state of a refinement that released energy (a snap)
     energy_jumps = []  # d (m) of steps accepted as snaps by the work check
     while d < control.distance * (1 - 1e-12):
         if len(rec.rows["d"]) > max_steps:
@@ -536,6 +537,8 @@ def follow_displacement(
                                           step, fscale)
             if gap > WORK_TOL:  # Newton went to a far state, not along the path
                 if step / 2 >= o["min_step_ratio"] * dd0:
+                    if allowed and snap_candidate is None:
+                        snap_candidate = (q_try.copy(), target, it)
                     dd = step / 2
                     continue
                 if not allowed:  # no snap: it would need energy the push did not supply
@@ -574,19 +577,35 @@ def follow_displacement(
                 if reroute is not None:  # the rig moved on (a snap): continue from there
                     q, d = reroute.state.q.copy(), reroute.state.d
                     q_prev, d_prev, dd = None, d, dd0
+                    snap_candidate = None
                     system.evaluate(q)
                     system.factor()
                     system.accept(q)
                     neg = system.negative_eigenvalues
                     rec.add(d, control.force(system), q, system.energy, 0, neg, neg)
                     continue
-                status = (
-                    f"not converged: displacement control failed near d = {d:.6g} m "
-                    "(step size underflow; a snap-back? use method='mgdc')"
-                )
-                break
-            continue
+                if snap_candidate is None:
+                    snap_candidate = _snap_forward(system, q, d, held, q0, sign, dd0,
+                                                   rec, fu, fscale, tol, length, max_iter,
+                                                   control)
+                if snap_candidate is not None:
+                    # no rig to move on (branch="primary"): the path ends in d here (a fold
+                    # of this branch; arch, centre free, primary branch at d = 1.91 h), so
+                    # the push snaps forward to a state that releases energy, as a rig does
+                    q_try, target, it = snap_candidate
+                    energy_jumps.append(target)
+                    system.evaluate(q_try)
+                    system.factor()
+                else:
+                    status = (
+                        f"not converged: displacement control failed near d = {d:.6g} m "
+                        "(step size underflow; a snap-back? use method='mgdc')"
+                    )
+                    break
+            else:
+                continue
         turn_candidate = None
+        snap_candidate = None
         q_prev, d_prev = q, d
         q, d = q_try, target
         system.accept(q)
@@ -902,6 +921,31 @@ def _force_turns(rec, F_new, d_new, noise):
         return True
     s1, s2 = before / (d[-1] - d[-2]), after / (d_new - d[-1])
     return abs(s2 - s1) > 0.5 * max(abs(s1), abs(s2))
+
+
+def _snap_forward(system, q, d, held, q0, sign, dd0, rec, fu, fscale, tol, length, max_iter,
+                  control):
+    """A displacement-controlled snap past the end of a branch: the nearest state ahead,
+    on steps growing from CROSSING_REFINE x the first step up to the first step, that
+    Newton reaches from ``q`` and that releases energy (dE <= work). None if there is none;
+    the system is left assembled at ``q`` then."""
+    E_k, F_k = rec.rows["E"][-1] / fu, rec.rows["F"][-1] / fu
+    fmax = max(fscale, abs(F_k))
+    step = CROSSING_REFINE * dd0
+    while step <= dd0 * (1 + 1e-12):
+        q_try = q.copy()
+        q_try[held] = q0[held] + sign * (d + step)
+        it = _newton(system, q_try, 0.0, None, tol * fmax, TOL_DISP * length, max_iter,
+                     0.25 * length)
+        if it >= 0:
+            _, allowed = _work_mismatch(E_k, system.energy, F_k, control.force(system), step,
+                                        fscale)
+            if allowed:
+                return q_try, d + step, it
+        step *= 2.0
+    system.evaluate(q)
+    system.factor()
+    return None
 
 
 def _work_mismatch(E0, E1, F0, F1, dd, fscale):
