@@ -9,26 +9,20 @@ case: steps, first peak and minimum in EI h / l^3, their deviation from the beam
 from __future__ import annotations
 
 import os
-import statistics
 import sys
-import time
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
+from bench.timing import median_time  # noqa: E402
+
 BEAM = {6: (711.0, -338.0), 10: (732.0, -363.0), 20: (710.0, -356.0)}
 
 
 def warm_time(fn, runs=3):
-    fn()
-    times = []
-    out = None
-    for _ in range(runs):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
+    med, _, out = median_time(fn, runs, warm=True)
+    return med, out
 
 
 def main():

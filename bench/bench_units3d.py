@@ -12,24 +12,18 @@ import os
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import statistics  # noqa: E402
 import sys  # noqa: E402
-import time  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
+
+from bench.timing import median_time  # noqa: E402
 
 RUNS = int(os.environ.get("BENCH_RUNS", "5"))
 
 
 def _median(fn, runs=RUNS):
-    fn()
-    times, out = [], None
-    for _ in range(runs):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), min(times), out
+    return median_time(fn, runs, warm=True)
 
 
 def main():

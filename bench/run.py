@@ -8,27 +8,21 @@ numba cache. The machine is whatever runs this: say which when you quote the num
 from __future__ import annotations
 
 import os
-import statistics
 import subprocess
 import sys
 import tempfile
-import time
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
+from bench.timing import median_time as _median_time  # noqa: E402
+
 RUNS = int(os.environ.get("BENCH_RUNS", "7"))
 
 
 def median_time(fn, runs=RUNS):
-    times = []
-    out = None
-    for _ in range(runs):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), min(times), out
+    return _median_time(fn, runs)
 
 
 def jit_warmup():

@@ -204,3 +204,15 @@ def input_file(path, option: str = "input") -> Path:
     except OSError as exc:
         raise CommandError(f"{option} {path}: cannot read ({exc.strerror or exc})") from None
     return path
+
+
+def format_value(value, scale=1.0, digits=4) -> str:
+    """A value for a printed table: "-" for None, yes/no for a flag, "n/a" for NaN, else
+    ``value * scale`` to ``digits`` significant digits."""
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if value != value:  # NaN
+        return "n/a"
+    return f"{value * scale:.{digits}g}"

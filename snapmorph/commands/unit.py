@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import integer, length_mm, number
+from snapmorph.commands._common import format_value, integer, length_mm, number
 
 HELP = """Simulate one bistable unit: push its apex down until it snaps, and report F_cr,
 the equilibrium displacements, S, theta (actuated and released) and the energies. Lengths on
@@ -41,16 +41,6 @@ def add_parser(sub):
     p.add_argument("--json", metavar="FILE", help="write the metrics and the curve as JSON")
     p.set_defaults(run=run)
     return p
-
-
-def _fmt(value, scale=1.0, digits=4):
-    if value is None:
-        return "-"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if value != value:  # NaN
-        return "n/a"
-    return f"{value * scale:.{digits}g}"
 
 
 # geometry_problem's messages start with the parameter(s) at fault: the options to name
@@ -97,22 +87,22 @@ def run(args: argparse.Namespace) -> int:
     rel = r.released or {}
     rows = [
         ("status", r.status, ""),
-        ("bistable", _fmt(r.bistable), ""),
-        ("F_cr", _fmt(r.F_cr), "N"),
-        ("d_cr", _fmt(r.d_cr, 1e3), "mm"),
-        ("d_unstable (ii)", _fmt(r.d_unstable, 1e3), "mm"),
-        ("d_second (iii)", _fmt(r.d_second, 1e3), "mm"),
-        ("S", _fmt(r.S, 1e3), "mm"),
-        ("S/L", _fmt(r.S / g.L if r.S == r.S else math.nan), ""),
-        ("theta", _fmt(r.theta_deg), "deg"),
-        ("theta_end", _fmt(r.theta_end_deg), "deg"),
-        ("self-standing", _fmt(r.self_standing), ""),
-        ("S released", _fmt(rel.get("S", math.nan), 1e3), "mm"),
-        ("theta released", _fmt(rel.get("theta_deg", math.nan)), "deg"),
-        ("energy barrier", _fmt(r.energy_barrier, 1e3), "mJ"),
-        ("energy stored (iii)", _fmt(r.energy_stored, 1e3), "mJ"),
+        ("bistable", format_value(r.bistable), ""),
+        ("F_cr", format_value(r.F_cr), "N"),
+        ("d_cr", format_value(r.d_cr, 1e3), "mm"),
+        ("d_unstable (ii)", format_value(r.d_unstable, 1e3), "mm"),
+        ("d_second (iii)", format_value(r.d_second, 1e3), "mm"),
+        ("S", format_value(r.S, 1e3), "mm"),
+        ("S/L", format_value(r.S / g.L if r.S == r.S else math.nan), ""),
+        ("theta", format_value(r.theta_deg), "deg"),
+        ("theta_end", format_value(r.theta_end_deg), "deg"),
+        ("self-standing", format_value(r.self_standing), ""),
+        ("S released", format_value(rel.get("S", math.nan), 1e3), "mm"),
+        ("theta released", format_value(rel.get("theta_deg", math.nan)), "deg"),
+        ("energy barrier", format_value(r.energy_barrier, 1e3), "mJ"),
+        ("energy stored (iii)", format_value(r.energy_stored, 1e3), "mJ"),
         ("nodes", str(r.n_nodes), ""),
-        ("solve time", _fmt(r.solve_time, 1e3, 3), "ms"),
+        ("solve time", format_value(r.solve_time, 1e3, 3), "ms"),
     ]
     print(f"unit L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm, E={args.E:g} Pa, "
           f"joint {args.joint_length:g} mm, bond "

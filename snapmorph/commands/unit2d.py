@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import integer, length_mm, number, output_file, plot_file
+from snapmorph.commands._common import (format_value, integer, length_mm, number, output_file,
+                                         plot_file)
 
 HELP = """Simulate the paper's 2-D unit: a square frame base of side L made of strips of width w,
 with two arches joining opposite midpoints of its sides and crossing (bonded) at the apex,
@@ -40,16 +41,6 @@ def add_parser(sub):
     return p
 
 
-def _fmt(value, scale=1.0, digits=4):
-    if value is None:
-        return "-"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if value != value:
-        return "n/a"
-    return f"{value * scale:.{digits}g}"
-
-
 def run(args: argparse.Namespace) -> int:
     import json
 
@@ -63,11 +54,11 @@ def run(args: argparse.Namespace) -> int:
                      E=args.E)
     r = simulate_unit_2d(g, nodes=args.nodes, nu=args.nu)
     print(f"unit2d L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm")
-    rows = [("status", r.status, ""), ("bistable", _fmt(r.bistable), ""),
-            ("F_cr", _fmt(r.F_cr), "N"), ("d_cr", _fmt(r.d_cr, 1e3), "mm"),
-            ("d_unstable (ii)", _fmt(r.d_unstable, 1e3), "mm"),
-            ("d_second (iii)", _fmt(r.d_second, 1e3), "mm"),
-            ("nodes", str(r.n_nodes), ""), ("solve time", _fmt(r.solve_time, 1.0, 3), "s")]
+    rows = [("status", r.status, ""), ("bistable", format_value(r.bistable), ""),
+            ("F_cr", format_value(r.F_cr), "N"), ("d_cr", format_value(r.d_cr, 1e3), "mm"),
+            ("d_unstable (ii)", format_value(r.d_unstable, 1e3), "mm"),
+            ("d_second (iii)", format_value(r.d_second, 1e3), "mm"),
+            ("nodes", str(r.n_nodes), ""), ("solve time", format_value(r.solve_time, 1.0, 3), "s")]
     for name, value, unit in rows:
         print(f"  {name:<20} {value:>12} {unit}")
     edges = r.edges.get("iii")
@@ -75,8 +66,8 @@ def run(args: argparse.Namespace) -> int:
         print("  sides in state (iii):   S (mm)   theta (deg)   curvature (1/m)   sag (mm)")
         for side in SIDES:
             m = edges[side]
-            print(f"    {side:<8} {_fmt(m['S'], 1e3):>14} {_fmt(m['theta_deg']):>13} "
-                  f"{_fmt(m['curvature']):>17} {_fmt(m['sag'], 1e3):>10}")
+            print(f"    {side:<8} {format_value(m['S'], 1e3):>14} {format_value(m['theta_deg']):>13} "
+                  f"{format_value(m['curvature']):>17} {format_value(m['sag'], 1e3):>10}")
     if js:
         payload = {k: (None if isinstance(v, float) and v != v else v)
                    for k, v in r.summary().items()}

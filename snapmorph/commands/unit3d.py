@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import integer, length_mm, number, output_file, plot_file
+from snapmorph.commands._common import (format_value, integer, length_mm, number, output_file,
+                                         plot_file)
 
 HELP = """Simulate one bistable unit in 3-D: a rectangular frame base (two side rails of width w,
 solid end regions of width 4w), the arch through the frame's hole, rollers and actuator, on
@@ -48,16 +49,6 @@ def add_parser(sub):
     return p
 
 
-def _fmt(value, scale=1.0, digits=4):
-    if value is None:
-        return "-"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if value != value:
-        return "n/a"
-    return f"{value * scale:.{digits}g}"
-
-
 def run(args: argparse.Namespace) -> int:
     import json
 
@@ -86,16 +77,16 @@ def run(args: argparse.Namespace) -> int:
         from solver.unit import simulate_unit
 
         planar = simulate_unit(g)
-    rows = [("status", r.status, ""), ("bistable", _fmt(r.bistable), ""),
-            ("F_cr", _fmt(r.F_cr), "N"), ("d_cr", _fmt(r.d_cr, 1e3), "mm"),
-            ("d_unstable (ii)", _fmt(r.d_unstable, 1e3), "mm"),
-            ("d_second (iii)", _fmt(r.d_second, 1e3), "mm"),
-            ("S", _fmt(r.S, 1e3), "mm"), ("theta", _fmt(r.theta_deg), "deg")]
+    rows = [("status", r.status, ""), ("bistable", format_value(r.bistable), ""),
+            ("F_cr", format_value(r.F_cr), "N"), ("d_cr", format_value(r.d_cr, 1e3), "mm"),
+            ("d_unstable (ii)", format_value(r.d_unstable, 1e3), "mm"),
+            ("d_second (iii)", format_value(r.d_second, 1e3), "mm"),
+            ("S", format_value(r.S, 1e3), "mm"), ("theta", format_value(r.theta_deg), "deg")]
     for state in ("i", "ii", "iii"):
-        rows.append((f"arch tilt ({state})", _fmt(r.arch_tilt_deg.get(state)), "deg"))
+        rows.append((f"arch tilt ({state})", format_value(r.arch_tilt_deg.get(state)), "deg"))
     for state in ("i", "ii", "iii"):
-        rows.append((f"rail twist ({state})", _fmt(r.rail_twist_deg.get(state)), "deg"))
-    rows += [("nodes", str(r.n_nodes), ""), ("solve time", _fmt(r.solve_time, 1.0, 3), "s")]
+        rows.append((f"rail twist ({state})", format_value(r.rail_twist_deg.get(state)), "deg"))
+    rows += [("nodes", str(r.n_nodes), ""), ("solve time", format_value(r.solve_time, 1.0, 3), "s")]
     print(f"unit3d L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm, "
           f"tilt={args.tilt:g} deg, apex offset={args.apex_offset:g} mm, actuator offset="
           f"{args.actuator_offset:g} mm")
@@ -106,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
     for name, value, unit in rows:
         extra = ""
         if name in planar_rows:
-            extra = f"   planar {_fmt(planar_rows[name][0], planar_rows[name][1]):>10}"
+            extra = f"   planar {format_value(planar_rows[name][0], planar_rows[name][1]):>10}"
         print(f"  {name:<20} {value:>12} {unit:<4}{extra}")
     if js:
         payload = {k: (None if isinstance(v, float) and v != v else v)

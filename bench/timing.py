@@ -1,0 +1,19 @@
+"""One way to time a warm call for every benchmark: median and best of several runs."""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+
+def median_time(fn, runs, warm=False):
+    """(median s, best s, last result) of ``runs`` calls of ``fn``; ``warm`` calls it once
+    first, untimed (numba kernels compiled or loaded from the cache)."""
+    if warm:
+        fn()
+    times, out = [], None
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), min(times), out
