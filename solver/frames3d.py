@@ -69,14 +69,19 @@ def space_parallel_frames(tangents, normal):
     return d
 
 
+@njit(cache=True)
 def transport_frames(t_source, d_source, t_new):
     """Time-parallel transport of the reference directors ``d_source`` (n, 3) from the
     tangents ``t_source`` to ``t_new`` (re-orthonormalised against round-off)."""
-    d = np.empty_like(d_source)
+    d = np.empty((d_source.shape[0], 3))
     for j in range(d_source.shape[0]):
         v = parallel_transport(d_source[j], t_source[j], t_new[j])
-        v -= np.dot(v, t_new[j]) * t_new[j]
-        d[j] = v / np.linalg.norm(v)
+        c = v[0] * t_new[j, 0] + v[1] * t_new[j, 1] + v[2] * t_new[j, 2]
+        for k in range(3):
+            v[k] -= c * t_new[j, k]
+        norm = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+        for k in range(3):
+            d[j, k] = v[k] / norm
     return d
 
 

@@ -46,42 +46,40 @@ def _apply(q, dof_map, du):
 
 
 @njit(cache=True)
-def newton_iteration(q, lam, P, elements, dofs, dof_map, band, grad, grad_full, work,
-                     pivot_tol, tol_force):
-    """One Newton iteration at fixed load lam P (N). ``work`` is (n, 2) scratch.
+def newton_correction(lam, P, band, grad, work, pivot_tol, tol_force):
+    """The part of a Newton iteration after assembly (shared by planar and 3-D rods):
+    residual, LDL^T of ``band``, and the correction -K^-1 R into ``work[:, 1]``.
 
-    Returns (status, negative_eigenvalues, residual_max, du_max, energy)."""
-    energy = assemble_system(q, elements, dofs, band, grad, grad_full)
+    Returns (status, negative_eigenvalues, residual_max) with the statuses above (2: the
+    correction is ready, nothing updated yet)."""
     R = work[:, 0]
     r_max = _residual(grad, lam, P, R)
     status, neg, _ = ldlt_factor(band, pivot_tol)
     if status != 0 or not r_max < np.inf:
-        return 1, neg, r_max, 0.0, energy
+        return 1, neg, r_max
     if r_max <= tol_force:
-        return 0, neg, r_max, 0.0, energy
+        return 0, neg, r_max
     rhs = work[:, 1:2]
     for i in range(R.shape[0]):
         rhs[i, 0] = -R[i]
     ldlt_solve(band, rhs)
-    du_max = _apply(q, dof_map, rhs[:, 0])
-    return 2, neg, r_max, du_max, energy
+    return 2, neg, r_max
 
 
 @njit(cache=True)
-def mgdc_iteration(q, lam, P, uP1, elements, dofs, dof_map, band, grad, grad_full, work,
-                   pivot_tol, tol_force):
-    """One MGDC corrector iteration: the load increment keeps the correction orthogonal to
-    the step's first tangent ``uP1``. ``work`` is (n, 3) scratch.
+def mgdc_correction(lam, P, uP1, band, grad, work, pivot_tol, tol_force):
+    """The part of an MGDC corrector iteration after assembly (shared by planar and 3-D
+    rods): residual, LDL^T, and the correction whose load increment dl keeps it orthogonal
+    to the step's first tangent ``uP1``, into ``work[:, 0]``.
 
-    Returns (status, negative_eigenvalues, residual_max, du_max, dlam, energy)."""
-    energy = assemble_system(q, elements, dofs, band, grad, grad_full)
+    Returns (status, negative_eigenvalues, residual_max, dl)."""
     R = work[:, 0]
     r_max = _residual(grad, lam, P, R)
     status, neg, _ = ldlt_factor(band, pivot_tol)
     if status != 0 or not r_max < np.inf:
-        return 1, neg, r_max, 0.0, 0.0, energy
+        return 1, neg, r_max, 0.0
     if r_max <= tol_force:
-        return 0, neg, r_max, 0.0, 0.0, energy
+        return 0, neg, r_max, 0.0
     rhs = work[:, 1:3]
     for i in range(R.shape[0]):
         rhs[i, 0] = P[i]
@@ -93,10 +91,39 @@ def mgdc_iteration(q, lam, P, uP1, elements, dofs, dof_map, band, grad, grad_ful
         num += uP1[i] * rhs[i, 1]
         den += uP1[i] * rhs[i, 0]
     if den == 0.0 or not abs(den) < np.inf:
-        return 1, neg, r_max, 0.0, 0.0, energy
+        return 1, neg, r_max, 0.0
     dl = -num / den
     du = work[:, 0]  # R is no longer needed
     for i in range(R.shape[0]):
         du[i] = dl * rhs[i, 0] + rhs[i, 1]
-    du_max = _apply(q, dof_map, du)
+    return 2, neg, r_max, dl
+
+
+@njit(cache=True)
+def newton_iteration(q, lam, P, elements, dofs, dof_map, band, grad, grad_full, work,
+                     pivot_tol, tol_force):
+    """One Newton iteration at fixed load lam P (N). ``work`` is (n, 3) scratch.
+
+    Returns (status, negative_eigenvalues, residual_max, du_max, energy)."""
+    energy = assemble_system(q, elements, dofs, band, grad, grad_full)
+    status, neg, r_max = newton_correction(lam, P, band, grad, work, pivot_tol, tol_force)
+    if status != 2:
+        return status, neg, r_max, 0.0, energy
+    du_max = _apply(q, dof_map, work[:, 1])
+    return 2, neg, r_max, du_max, energy
+
+
+@njit(cache=True)
+def mgdc_iteration(q, lam, P, uP1, elements, dofs, dof_map, band, grad, grad_full, work,
+                   pivot_tol, tol_force):
+    """One MGDC corrector iteration: the load increment keeps the correction orthogonal to
+    the step's first tangent ``uP1``. ``work`` is (n, 3) scratch.
+
+    Returns (status, negative_eigenvalues, residual_max, du_max, dlam, energy)."""
+    energy = assemble_system(q, elements, dofs, band, grad, grad_full)
+    status, neg, r_max, dl = mgdc_correction(lam, P, uP1, band, grad, work, pivot_tol,
+                                             tol_force)
+    if status != 2:
+        return status, neg, r_max, 0.0, 0.0, energy
+    du_max = _apply(q, dof_map, work[:, 0])
     return 2, neg, r_max, du_max, dl, energy

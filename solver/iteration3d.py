@@ -14,8 +14,7 @@ import numpy as np
 from numba import njit
 
 from solver.assembly3d import assemble_system3d_ws
-from solver.banded import ldlt_factor, ldlt_solve
-from solver.iteration import _residual
+from solver.iteration import mgdc_correction, newton_correction
 
 
 @njit(cache=True)
@@ -49,51 +48,24 @@ def newton_iteration3d(q, lam, P, model, dof_map, dof_scale, band, grad, grad_fu
 
     Returns (status, negative_eigenvalues, residual_max, du_max, energy)."""
     energy = _assemble(q, model, dof_scale, band, grad, grad_full)
-    R = work[:, 0]
-    r_max = _residual(grad, lam, P, R)
-    status, neg, _ = ldlt_factor(band, pivot_tol)
-    if status != 0 or not r_max < np.inf:
-        return 1, neg, r_max, 0.0, energy
-    if r_max <= tol_force:
-        return 0, neg, r_max, 0.0, energy
-    rhs = work[:, 1:2]
-    for i in range(R.shape[0]):
-        rhs[i, 0] = -R[i]
-    ldlt_solve(band, rhs)
-    du_max = _apply_scaled(q, dof_map, dof_scale, rhs[:, 0])
+    status, neg, r_max = newton_correction(lam, P, band, grad, work, pivot_tol, tol_force)
+    if status != 2:
+        return status, neg, r_max, 0.0, energy
+    du_max = _apply_scaled(q, dof_map, dof_scale, work[:, 1])
     return 2, neg, r_max, du_max, energy
 
 
 @njit(cache=True)
 def mgdc_iteration3d(q, lam, P, uP1, model, dof_map, dof_scale, band, grad, grad_full, work,
                      pivot_tol, tol_force):
-    """One MGDC corrector iteration of 3-D rods: the load increment keeps the correction
-    orthogonal to the step's first tangent ``uP1``. ``work`` (n, 3) scratch.
+    """One MGDC corrector iteration of 3-D rods (see `solver.iteration.mgdc_correction`).
+    ``work`` (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, dlam, energy)."""
     energy = _assemble(q, model, dof_scale, band, grad, grad_full)
-    R = work[:, 0]
-    r_max = _residual(grad, lam, P, R)
-    status, neg, _ = ldlt_factor(band, pivot_tol)
-    if status != 0 or not r_max < np.inf:
-        return 1, neg, r_max, 0.0, 0.0, energy
-    if r_max <= tol_force:
-        return 0, neg, r_max, 0.0, 0.0, energy
-    rhs = work[:, 1:3]
-    for i in range(R.shape[0]):
-        rhs[i, 0] = P[i]
-        rhs[i, 1] = -R[i]
-    ldlt_solve(band, rhs)
-    num = 0.0
-    den = 0.0
-    for i in range(R.shape[0]):
-        num += uP1[i] * rhs[i, 1]
-        den += uP1[i] * rhs[i, 0]
-    if den == 0.0 or not abs(den) < np.inf:
-        return 1, neg, r_max, 0.0, 0.0, energy
-    dl = -num / den
-    du = work[:, 0]  # R is no longer needed
-    for i in range(R.shape[0]):
-        du[i] = dl * rhs[i, 0] + rhs[i, 1]
-    du_max = _apply_scaled(q, dof_map, dof_scale, du)
+    status, neg, r_max, dl = mgdc_correction(lam, P, uP1, band, grad, work, pivot_tol,
+                                             tol_force)
+    if status != 2:
+        return status, neg, r_max, 0.0, 0.0, energy
+    du_max = _apply_scaled(q, dof_map, dof_scale, work[:, 0])
     return 2, neg, r_max, du_max, dl, energy

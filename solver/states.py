@@ -8,6 +8,7 @@ when a load-controlled Newton from a rough guess would wander off to another equ
 from __future__ import annotations
 
 import numpy as np
+import scipy.optimize
 
 from solver.continuation import TOL_DISP, ConvergenceError, _newton, make_control, state_from
 
@@ -46,8 +47,14 @@ class DisplacementProbe:
 
 
 def refine_maximum(probe, d, F, positions, i, tol_d=None):
-    """Maximum of F(d) near path sample ``i`` (a local maximum of F): golden-section search
-    on d in [d[i-1], d[i+1]] with displacement-controlled solves. Returns (F_max, d_max)."""
+    """Maximum of F(d) near path sample ``i`` (a local maximum of F): Brent's bounded search
+    (golden section with parabolic steps, `scipy.optimize.minimize_scalar`) on d in
+    [d[i-1], d[i+1]] with displacement-controlled solves. Returns (F_max, d_max).
+
+    Each solve starts from the nearest path sample, not from an earlier solve: with the
+    node held, the force maximum is close to a bifurcation of the held structure (an
+    asymmetric mode; docs/path-following.md), where K is nearly singular and a Newton
+    started there takes a wild first step."""
     a, b = float(d[i - 1]), float(d[i + 1])
     if not a < b:
         raise ConvergenceError("the path is not monotone in d around the maximum")
@@ -55,26 +62,15 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
     cache = {}
 
     def f(x):
+        x = float(x)
         if x not in cache:
-            # start from the nearest sample: a predictor that cannot jump branches
             j = i - 1 + int(np.argmin(np.abs(np.asarray(d[i - 1:i + 2]) - x)))
             cache[x] = probe.solve(positions[j], x)[1]
         return cache[x]
 
-    invphi = (np.sqrt(5.0) - 1.0) / 2.0
-    x1 = b - invphi * (b - a)
-    x2 = a + invphi * (b - a)
-    f1, f2 = f(x1), f(x2)
-    while b - a > tol_d:
-        if f1 > f2:
-            b, x2, f2 = x2, x1, f1
-            x1 = b - invphi * (b - a)
-            f1 = f(x1)
-        else:
-            a, x1, f1 = x1, x2, f2
-            x2 = a + invphi * (b - a)
-            f2 = f(x2)
-    x = 0.5 * (a + b)
+    res = scipy.optimize.minimize_scalar(lambda x: -f(x), bounds=(a, b), method="bounded",
+                                         options={"xatol": 0.5 * tol_d, "maxiter": 60})
+    x = float(res.x)
     return f(x), x
 
 

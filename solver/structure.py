@@ -91,7 +91,10 @@ def _per_edge(value, n_edges, name):
     return arr
 
 
-class _UnionFind:
+class UnionFind:
+    """Groups of nodes that share displacements (ties, rigid sets, joints); the
+    representative of a group is its lowest node."""
+
     def __init__(self, n):
         self.parent = list(range(n))
 
@@ -515,7 +518,7 @@ class Structure:
 
     def supernodes(self):
         """Node -> representative of the group of nodes that share displacements."""
-        uf = _UnionFind(self._n_total)
+        uf = UnionFind(self._n_total)
         for a, b in self._merges:
             uf.union(a, b)
         for k, c in enumerate(self._clamps):

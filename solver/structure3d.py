@@ -14,13 +14,15 @@ constrained system in `solver.system3d`; the drivers are the planar solver's own
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse
-import scipy.sparse.csgraph
 
 from solver.energies3d import material_curvature, tip_moment_terms, twist_angle
 from solver.frames3d import space_parallel_frames
+from solver.ordering import envelope_order
+from solver.structure import UnionFind
 from solver.system3d import RodSystem3D
 
 _AXES = "xyz"
@@ -46,41 +48,25 @@ class Rod3D:
     E: float  # Pa
     nu: float
 
-    @property
+    @cached_property
     def EA(self):
         """(N-1,) axial stiffness, N."""
         return self.E * self.width * self.thickness
 
-    @property
+    @cached_property
     def EI1(self):
         """(N-1,) bending stiffness through the thickness (the easy way), E w t^3 / 12, N m^2."""
         return self.E * self.width * self.thickness**3 / 12.0
 
-    @property
+    @cached_property
     def EI2(self):
         """(N-1,) bending stiffness in the strip's plane, E t w^3 / 12, N m^2."""
         return self.E * self.thickness * self.width**3 / 12.0
 
-    @property
+    @cached_property
     def GJ(self):
         """(N-1,) torsional stiffness, G = E / (2 (1 + nu)), N m^2."""
         return self.E / (2.0 * (1.0 + self.nu)) * torsion_constant(self.width, self.thickness)
-
-
-class _UnionFind:
-    def __init__(self, n):
-        self.parent = list(range(n))
-
-    def find(self, a):
-        while self.parent[a] != a:
-            self.parent[a] = self.parent[self.parent[a]]
-            a = self.parent[a]
-        return a
-
-    def union(self, a, b):
-        ra, rb = self.find(a), self.find(b)
-        if ra != rb:
-            self.parent[max(ra, rb)] = min(ra, rb)
 
 
 def _finite_array(value, name, unit):
@@ -110,8 +96,13 @@ def _per_edge(value, n_edges, name):
 def _frame_pair(ta, da, tb, db, sa=1.0, sb=1.0):
     """The 18 frame components of `solver.energies3d` for two (tangent, m1) frames."""
     z = np.empty(18)
-    for s, (t, d, sg) in enumerate(((ta, da, sa), (tb, db, sb))):
-        z[9 * s: 9 * s + 9] = np.concatenate([sg * t, d, sg * np.cross(t, d)])
+    for k, (t, d, sg) in enumerate(((ta, da, sa), (tb, db, sb))):
+        o = 9 * k
+        z[o: o + 3] = sg * t
+        z[o + 3: o + 6] = d
+        z[o + 6] = sg * (t[1] * d[2] - t[2] * d[1])
+        z[o + 7] = sg * (t[2] * d[0] - t[0] * d[2])
+        z[o + 8] = sg * (t[0] * d[1] - t[1] * d[0])
     return z
 
 
@@ -152,11 +143,11 @@ class Structure3D:
     # ------------------------------------------------------------------ sizes
     @property
     def n_nodes(self) -> int:
-        return int(sum(len(p) for p in self._positions))
+        return int(self.rods[-1].nodes[-1]) + 1 if self.rods else 0
 
     @property
     def n_edges(self) -> int:
-        return int(sum(len(p) - 1 for p in self._positions))
+        return int(self.rods[-1].edges[-1]) + 1 if self.rods else 0
 
     @property
     def reference_positions(self) -> np.ndarray:
@@ -164,6 +155,19 @@ class Structure3D:
         if not self._positions:
             return np.zeros((0, 3))
         return np.concatenate(self._positions, axis=0)
+
+    def _node_position(self, node):
+        rod, i = self._rod_of(node)
+        r = int(np.searchsorted(self._rod_starts(), rod.nodes[0], side="right")) - 1
+        return self._positions[r][i]
+
+    def _size(self):
+        """Largest extent of the stress-free structure along x, y or z (m)."""
+        cached = getattr(self, "_size_cache", None)
+        if cached is None or cached[0] != len(self.rods):
+            X = self.reference_positions
+            cached = self._size_cache = (len(self.rods), float(np.max(np.ptp(X, axis=0))))
+        return cached[1]
 
     def reference_frames(self):
         """(tangents, directors), each (n_edges, 3): the stress-free edges' unit tangents
@@ -263,8 +267,14 @@ class Structure3D:
         return rod
 
     def _frame(self, rod, j):
-        r = next(i for i, other in enumerate(self.rods) if other is rod)
+        r = int(np.searchsorted(self._rod_starts(), rod.nodes[0], side="right")) - 1
         return self._tangents[r][j], self._directors[r][j], self._lengths[r][j]
+
+    def _rod_starts(self):
+        """(n_rods,) first node of every rod (increasing: rods are numbered in order)."""
+        if len(getattr(self, "_starts", ())) != len(self.rods):
+            self._starts = np.array([int(r.nodes[0]) for r in self.rods], dtype=np.int64)
+        return self._starts
 
     def _make_pair(self, rod_a, ja, sa, rod_b, jb, sb, lengths=None):
         """A pair of two rod edges with series stiffnesses over their half lengths and the
@@ -290,10 +300,11 @@ class Structure3D:
         return node
 
     def _rod_of(self, node):
-        for rod in self.rods:
-            if rod.nodes[0] <= node <= rod.nodes[-1]:
-                return rod, int(node - rod.nodes[0])
-        raise IndexError(node)
+        r = int(np.searchsorted(self._rod_starts(), node, side="right")) - 1
+        if r < 0 or not node <= self.rods[r].nodes[-1]:
+            raise IndexError(node)
+        rod = self.rods[r]
+        return rod, int(node - rod.nodes[0])
 
     def fix(self, node, components="xyz"):
         """Hold the displacement of ``node`` at zero in any subset of "x", "y", "z"."""
@@ -352,29 +363,37 @@ class Structure3D:
         ``node_b``: the nodes share their position, and an edge of each rod at the joint is
         coupled by bending about both axes and twisting (the pair a kink inside one rod would
         have, with the stress-free angle between them as natural curvature and twist), so
-        orientations are carried through the joint."""
+        orientations are carried through the joint.
+
+        The coupled edges are node_a's rod's edge *into* node_a and node_b's rod's edge *out
+        of* node_b (a rod's only edge where the node is its end). Where both nodes are
+        interior the coupling therefore sits on one side of the joint; a structure that must
+        stay mirror-symmetric joins in both orders, ``joint(a, b)`` and ``joint(b, a)`` (as
+        `units.frame3d.Mesh3D.bond` does). Rods running side by side from a common end node
+        (a fold of the two coupled edges) are coupled frame to frame."""
         a = self._check_node(node_a, "node_a")
         b = self._check_node(node_b, "node_b")
         if a == b:
             raise ValueError(f"cannot joint node {a} to itself")
-        X = self.reference_positions
-        scale = float(np.max(np.ptp(X, axis=0)))
-        if np.linalg.norm(X[a] - X[b]) > 1e-9 * scale:
-            raise ValueError(f"joint needs coincident nodes; nodes {a} and {b} are "
-                             f"{np.linalg.norm(X[a] - X[b]):.3g} m apart")
         rod_a, ia = self._rod_of(a)
         rod_b, ib = self._rod_of(b)
+        xa, xb = self._node_position(a), self._node_position(b)
+        gap = float(np.linalg.norm(xa - xb))
+        if gap > 1e-9 * self._size():
+            raise ValueError(f"joint needs coincident nodes; nodes {a} and {b} are "
+                             f"{gap:.3g} m apart")
         # edge of rod a pointing into the joint, edge of rod b pointing out of it
         ja, sa = (ia - 1, 1.0) if ia > 0 else (0, -1.0)
         jb, sb = (ib, 1.0) if ib < len(rod_b.nodes) - 1 else (ib - 1, -1.0)
         ta = sa * self._frame(rod_a, ja)[0]
         tb = sb * self._frame(rod_b, jb)[0]
         if ta @ tb < -0.9:
-            raise ValueError(
-                f"joint({a}, {b}) would couple the edge of node_a's rod into the joint with an "
-                "almost opposite edge of node_b's rod out of it (a fold of more than ~150 "
-                "degrees, where the curvature measure is singular); swap node_a and node_b "
-                "or tie the nodes")
+            # a fold of more than ~150 degrees (two rods that both start, or both end, at
+            # the joint and run side by side), where the kink's curvature measure is
+            # singular: couple b's edge reversed instead, i.e. the frames themselves, whose
+            # relative rotation is then small (the pair measures the rotation between two
+            # frames; reversing an edge turns its frame 180 degrees about the face normal)
+            sb = -sb
         self._merges.append((a, b))
         self._pairs[("joint", a, b, len(self._pairs))] = self._make_pair(rod_a, ja, sa, rod_b, jb, sb)
         self._cache = None
@@ -441,7 +460,7 @@ class Structure3D:
 
     def supernodes(self):
         """Node -> representative of the group of nodes that share displacements."""
-        uf = _UnionFind(self.n_nodes)
+        uf = UnionFind(self.n_nodes)
         for a, b in self._merges:
             uf.union(a, b)
         return np.array([uf.find(i) for i in range(self.n_nodes)], dtype=np.int64)
@@ -495,7 +514,8 @@ class Structure3D:
     def reduced_system(self, extra_fixed=None) -> RodSystem3D:
         """A fresh system (reference frames at the stress-free state) with the DOFs ordered
         by reverse Cuthill–McKee over node groups and edge twists, so that positions and
-        twists interleave along each rod and the band stays narrow.
+        twists interleave along each rod, started where the envelope the factorisation
+        works on is smallest (`solver.ordering`).
 
         ``extra_fixed``: iterable of (node, component 0..2) held in addition to supports."""
         model = self.model()
@@ -525,8 +545,13 @@ class Structure3D:
                         cols.append(g[ok, j])
         r = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
         c = np.concatenate(cols) if cols else np.zeros(0, dtype=np.int64)
-        graph = scipy.sparse.csr_matrix((np.ones(len(r)), (r, c)), shape=(n_groups, n_groups))
-        order = scipy.sparse.csgraph.reverse_cuthill_mckee(graph, symmetric_mode=True)
+        key = "group_order"
+        order = model.get(key)
+        if order is None:  # the graph changes only with the structure (the cache's lifetime)
+            graph = scipy.sparse.csr_matrix((np.ones(len(r)), (r, c)),
+                                            shape=(n_groups, n_groups))
+            sizes = np.concatenate([np.full(len(uniq), 3), np.ones(ne)]).astype(np.int64)
+            order = model[key] = envelope_order(graph, sizes)
 
         free_full = np.concatenate([~fixed.reshape(-1), np.ones(ne, dtype=bool)])
         # full DOFs of each group, in component order; merged nodes share one set of DOFs

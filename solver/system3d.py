@@ -47,7 +47,7 @@ class RodSystem3D(ReducedSystem):
         self.representative[self.dof_map[free]] = free
         self.n = int(n_reduced)
         self.bandwidth = int(bandwidth)
-        self.band = np.zeros((self.bandwidth + 1, max(self.n, 1)))
+        self.band = np.zeros((self.bandwidth + 1, max(self.n, 1)), order="F")
         self._band_copy = np.empty_like(self.band)
         self.grad = np.zeros(max(self.n, 1))
         self.grad_full = np.zeros(self.dof_map.shape[0])
@@ -119,7 +119,7 @@ class RodSystem3D(ReducedSystem):
         en = self.edge_nodes[: self.n_edges]
         e = X[en[:, 1]] - X[en[:, 0]]
         t_new = e / np.linalg.norm(e, axis=1)[:, None]
-        self.src_d[: self.n_edges] = transport_frames(self.src_t[: self.n_edges],
+        self.src_d[: self.n_edges] = transport_frames(np.ascontiguousarray(self.src_t[: self.n_edges]),
                                                       self.src_d[: self.n_edges], t_new)
         self.src_t[: self.n_edges] = t_new
         self._reference_twist = None

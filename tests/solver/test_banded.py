@@ -31,3 +31,44 @@ def test_singular_matrix_is_reported(rng):
     band[0] = [1.0, 1.0, 0.0, 1.0, 1.0]
     status, _, _ = ldlt_factor(band, 1e-13)
     assert status == 1
+
+
+def _envelope_band(rng, n, bw, order="C"):
+    """A band whose columns are short except a few that reach far (a ring closing: the
+    shape of a frame's stiffness), with zeros inside the band that fill in."""
+    band = np.zeros((bw + 1, n), order=order)
+    band[0] = 4.0 + rng.random(n)
+    band[1, : n - 1] = rng.normal(size=n - 1)
+    band[2, : n - 2] = 0.3 * rng.normal(size=n - 2)
+    for j in rng.choice(n - bw, 4, replace=False):
+        band[bw, j] = rng.normal()
+        band[bw // 2, j] = rng.normal()
+    band[0] -= 1.5  # a few negative pivots
+    return band
+
+
+@pytest.mark.parametrize("order", ["C", "F"])
+def test_envelope_factor_matches_dense_and_the_full_band_loop(rng, order):
+    """Stopping each column at its last nonzero (fill included) gives the dense solution
+    and inertia, in either memory order, bit for bit what the whole band gives."""
+    n, bw = 80, 30
+    band = _envelope_band(rng, n, bw, order)
+    dense = band_to_dense(band)
+    full = band.copy(order=order)
+    full[bw, 0] = 1e-300  # a nonzero at the band's edge in column 0: that column runs whole
+    status, negative, _ = ldlt_factor(band, 1e-14)
+    assert status == 0
+    assert negative == int(np.sum(np.linalg.eigvalsh(dense) < 0))
+    b = rng.normal(size=(n, 2))
+    x = ldlt_solve(band, b.copy())
+    np.testing.assert_allclose(dense @ x, b, atol=1e-9 * np.linalg.cond(dense))
+    # the same factor as the old whole-band loop: compare with a reference implementation
+    ref = band_to_dense(_envelope_band(np.random.default_rng(0), n, bw))
+    ref_band = _envelope_band(np.random.default_rng(0), n, bw)
+    ldlt_factor(ref_band, 1e-14)
+    L = np.eye(n)
+    for k in range(1, bw + 1):
+        idx = np.arange(n - k)
+        L[idx + k, idx] = ref_band[k, : n - k]
+    D = np.diag(ref_band[0])
+    np.testing.assert_allclose(L @ D @ L.T, ref, atol=1e-12 * np.abs(ref).max())

@@ -306,15 +306,43 @@ def test_bad_input_never_shows_a_numba_traceback():
     assert "numba" not in r.stderr.lower()
 
 
-def test_joint_of_antiparallel_edges_is_refused():
-    """Two rods both starting at the joint along the same line: the edge into the joint and
-    the edge out of it would be antiparallel (a 180 degree fold): a clear error."""
-    s = np.linspace(0.0, 0.05, 5)
+def test_joint_of_rods_side_by_side_couples_their_frames():
+    """Two rods both starting at the joint along the same line (edges that would fold by
+    180 degrees in a kink pair) are coupled frame to frame: no singularity (exact
+    derivatives at a bent state), and the joint carries moments: with the first rod clamped
+    at the joint, the second is a cantilever (tip deflection within the joint's extra
+    compliance, 3 l / L of PL^3/3EI), where a tie alone would leave it free to swing."""
+    L, n = 0.05, 21
+    s = np.linspace(0.0, L, n)
     st = Structure3D()
     r1 = st.add_rod(np.stack([s, 0 * s, 0 * s], 1), W, T, E)
     r2 = st.add_rod(np.stack([s, 0 * s, 0 * s], 1), W, T, E)
-    with pytest.raises(ValueError, match="opposite"):
-        st.joint(r1.nodes[0], r2.nodes[0])
-    # two rods continuing one another through the joint are fine
+    st.joint(r1.nodes[0], r2.nodes[0])
+    sysm = st.unconstrained_system()
+    rng = np.random.default_rng(3)
+    q = st.initial_state()
+    q[: 3 * st.n_nodes] += 1e-3 * rng.standard_normal(3 * st.n_nodes)
+    q[3 * st.n_nodes:] += 0.05 * rng.standard_normal(st.n_edges)
+    sysm.evaluate(q)
+    g = sysm.grad_full.copy()
+    assert np.all(np.isfinite(g))
+    h = 1e-7
+    for k in rng.choice(q.size, 12, replace=False):
+        qp, qm = q.copy(), q.copy()
+        qp[k] += h
+        qm[k] -= h
+        fd = (sysm.evaluate(qp) - sysm.evaluate(qm)) / (2 * h)
+        assert abs(fd - g[k]) <= 1e-5 * (abs(g[k]) + np.max(np.abs(g)) * 1e-3)
+    st.clamp(r1.nodes[0], r1.nodes[1])
+    st.fix(r1.nodes[-1], "xyz")
+    P = 1e-4  # N: small deflection
+    pos, _ = equilibrium(st, None, int(r2.nodes[-1]), (0.0, 0.0, -1.0), P)
+    delta = -pos[r2.nodes[-1], 2]
+    EI = E * W * T**3 / 12
+    ratio = delta / (P * L**3 / (3 * EI))
+    # the joint is a kink pair of stiffness EI / l (two half edges in series): the root
+    # turns by P L l / EI more, the tip drops by 3 l / L of PL^3/3EI more
+    assert abs(ratio - (1.0 + 3.0 / (n - 1))) < 0.01, ratio
+    # two rods continuing one another through the joint are fine too
     r3 = st.add_rod(np.stack([-s, 0 * s, 0 * s], 1), W, T, E)
     st.joint(r3.nodes[0], r1.nodes[0])

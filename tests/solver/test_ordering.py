@@ -1,0 +1,91 @@
+"""DOF ordering for the banded LDL^T: the envelope cost it minimises, and its effect on the
+3-D unit's frame (rings through the end regions)."""
+
+import numpy as np
+import scipy.sparse
+import scipy.sparse.csgraph
+
+from solver.ordering import cuthill_mckee, envelope_cost, envelope_order
+
+
+def _ring_with_spokes(n_ring=60, n_spokes=6):
+    """A ring (a frame's rails and arch closing through its ends) with short spokes."""
+    rows, cols = [], []
+    for i in range(n_ring):
+        rows.append(i)
+        cols.append((i + 1) % n_ring)
+    k = n_ring
+    for s in range(n_spokes):
+        rows.append(s * (n_ring // n_spokes))
+        cols.append(k)
+        k += 1
+    g = scipy.sparse.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(k, k))
+    return (g + g.T).tocsr()
+
+
+def _brute_cost(order, graph, sizes):
+    """Flop estimate of the envelope factorisation from a dense reconstruction."""
+    pos = np.empty(len(order), dtype=int)
+    pos[order] = np.arange(len(order))
+    start = np.concatenate([[0], np.cumsum(sizes[order])])
+    n = start[-1]
+    A = np.zeros((n, n), dtype=bool)
+    g = graph.tocoo()
+    for i, j in zip(g.row, g.col):
+        A[start[pos[i]]:start[pos[i] + 1], start[pos[j]]:start[pos[j] + 1]] = True
+    for i in range(len(order)):
+        A[start[pos[i]]:start[pos[i] + 1], start[pos[i]]:start[pos[i] + 1]] = True
+    first = np.array([np.flatnonzero(A[r, : r + 1])[0] for r in range(n)])
+    h = np.array([max([r for r in range(n) if first[r] <= j]) - j for j in range(n)], float)
+    return 0.5 * float(h @ h)
+
+
+def test_envelope_cost_matches_a_dense_reconstruction():
+    g = _ring_with_spokes(24, 4)
+    sizes = np.where(np.arange(g.shape[0]) % 3 == 0, 3, 1).astype(np.int64)
+    rng = np.random.default_rng(1)
+    for _ in range(3):
+        order = rng.permutation(g.shape[0])
+        assert envelope_cost(order, g.indptr, g.indices.astype(np.int64), sizes) == \
+            _brute_cost(order, g, sizes)
+
+
+def test_envelope_order_beats_scipy_rcm_and_is_deterministic():
+    g = _ring_with_spokes()
+    sizes = np.full(g.shape[0], 3, dtype=np.int64)
+    ind = g.indices.astype(np.int64)
+    ours = envelope_order(g, sizes)
+    assert sorted(ours.tolist()) == list(range(g.shape[0]))
+    rcm = scipy.sparse.csgraph.reverse_cuthill_mckee(g, symmetric_mode=True)
+    assert envelope_cost(ours, g.indptr, ind, sizes) <= envelope_cost(rcm, g.indptr, ind, sizes)
+    assert np.array_equal(ours, envelope_order(g, sizes))
+
+
+def test_cuthill_mckee_visits_every_component():
+    g = scipy.sparse.csr_matrix(np.array([[0, 1, 0, 0], [1, 0, 0, 0], [0, 0, 0, 1],
+                                          [0, 0, 1, 0]], dtype=float))
+    order = cuthill_mckee(g.indptr, g.indices.astype(np.int64), np.diff(g.indptr), 2, 4)
+    assert order.tolist() == [2, 3, 0, 1]
+
+
+def test_the_3d_unit_factorises_a_small_envelope():
+    """The frame unit's ordering: the factorisation's work (column heights to the last row
+    reaching them, fill included) is a small part of the band's n bw^2 / 2 (measured 0.6 M
+    against 3.2 M at 41 nodes; scipy's RCM order gave 3.1 M in a band of 192)."""
+    from units.frame3d import UnitGeometry
+    from units.unit3d import build_unit_3d
+
+    st = build_unit_3d(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3)).structure
+    sysm = st.reduced_system()
+    sysm.evaluate(st.initial_state())
+    band = sysm.band
+    n, bw = band.shape[1], band.shape[0] - 1
+    first = np.arange(n)
+    for k in range(1, bw + 1):
+        nz = np.flatnonzero(band[k, : n - k] != 0)
+        first[nz + k] = np.minimum(first[nz + k], nz)
+    reach = np.full(n, -1)
+    np.maximum.at(reach, first, np.arange(n))
+    h = (np.maximum.accumulate(reach) - np.arange(n)).astype(float)
+    assert 0.5 * float(h @ h) < 0.25 * 0.5 * n * bw * bw
+    assert bw < 120
