@@ -532,43 +532,39 @@ class Structure3D:
         from solver.assembly3d import element_dofs3d
 
         sf, _, pf, _ = element_dofs3d(n, model["edge_nodes"], ne, model["pair_edges"], dof_map0)
-        rows, cols = [], []
-        for full in (sf, pf):
-            if full.shape[0] == 0:
-                continue
-            g = np.where(full >= 0, group_of_full[np.maximum(full, 0)], -1)
-            for i in range(g.shape[1]):
-                for j in range(g.shape[1]):
-                    if i != j:
-                        ok = (g[:, i] >= 0) & (g[:, j] >= 0)
-                        rows.append(g[ok, i])
-                        cols.append(g[ok, j])
-        r = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
-        c = np.concatenate(cols) if cols else np.zeros(0, dtype=np.int64)
         key = "group_order"
         order = model.get(key)
         if order is None:  # the graph changes only with the structure (the cache's lifetime)
+            rows, cols = [], []
+            for full in (sf, pf):
+                if full.shape[0] == 0:
+                    continue
+                g = np.where(full >= 0, group_of_full[np.maximum(full, 0)], -1)
+                for i in range(g.shape[1]):
+                    for j in range(g.shape[1]):
+                        if i != j:
+                            ok = (g[:, i] >= 0) & (g[:, j] >= 0)
+                            rows.append(g[ok, i])
+                            cols.append(g[ok, j])
+            r = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
+            c = np.concatenate(cols) if cols else np.zeros(0, dtype=np.int64)
             graph = scipy.sparse.csr_matrix((np.ones(len(r)), (r, c)),
                                             shape=(n_groups, n_groups))
             sizes = np.concatenate([np.full(len(uniq), 3), np.ones(ne)]).astype(np.int64)
             order = model[key] = envelope_order(graph, sizes)
 
         free_full = np.concatenate([~fixed.reshape(-1), np.ones(ne, dtype=bool)])
-        # full DOFs of each group, in component order; merged nodes share one set of DOFs
-        group_members = [[] for _ in range(n_groups)]
-        for node in range(n):
-            if rep[node] == node:
-                for k in range(3):
-                    group_members[group[node]].append(3 * node + k)
-        for j in range(ne):
-            group_members[len(uniq) + j].append(3 * n + j)
+        # full DOFs of each group, in component order (-1: none); merged nodes share the
+        # representative's DOFs
+        members = -np.ones((n_groups, 3), dtype=np.int64)
+        members[: len(uniq)] = 3 * uniq[:, None] + np.arange(3)
+        members[len(uniq):, 0] = 3 * n + np.arange(ne)
+        seq = members[order].reshape(-1)
+        seq = seq[seq >= 0]
+        seq = seq[free_full[seq]]
         dof_map = -np.ones(3 * n + ne, dtype=np.int64)
-        k = 0
-        for gidx in order:
-            for full in group_members[gidx]:
-                if free_full[full]:
-                    dof_map[full] = k
-                    k += 1
+        k = len(seq)
+        dof_map[seq] = np.arange(k)
         # merged nodes take their representative's reduced DOFs
         node_map = dof_map[: 3 * n].reshape(-1, 3)
         node_map[:] = node_map[rep]

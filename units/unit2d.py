@@ -42,7 +42,7 @@ from units.frame3d import (
     end_tangent_angle,
     segment_points,
 )
-from units.push3d import push_through
+from units.push3d import level, push_through, relax_released, transfer_state
 
 __all__ = ["Unit2DModel", "Unit2DResult", "build_unit_mesh_2d", "build_unit_2d",
            "simulate_unit_2d", "edge_metrics", "DEFAULT_NODES_2D", "SIDES"]
@@ -90,7 +90,12 @@ def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float
             or not 11 <= nodes <= 1001):
         raise ValueError(f"nodes (resolution: nodes along a side) must be an integer in "
                          f"[11, 1001]; got {nodes!r}")
-    nu = float(nu)
+    try:
+        if isinstance(nu, (bool, np.bool_)):
+            raise TypeError
+        nu = float(nu)
+    except (TypeError, ValueError):
+        raise ValueError(f"nu (Poisson's ratio) must be a number; got {nu!r}") from None
     if not -1.0 < nu <= 0.5:
         raise ValueError(f"nu (Poisson's ratio) must be in (-1, 0.5]; got {nu!r}")
     L, w, t = g.L, g.w, g.t
@@ -177,7 +182,26 @@ def edge_metrics(points) -> dict:
 class Unit2DResult:
     """Metrics of the 2-D unit (SI; NaN where absent): F_cr, d_cr, d_unstable, d_second,
     bistable as the planar unit; ``edges[state][side]`` = `edge_metrics` of each side;
-    ``shapes[state]`` = {side or "arch_x"/"arch_y": (n, 3) positions}."""
+    ``shapes[state]`` = {side or "arch_x"/"arch_y": (n, 3) positions}.
+
+    bistable: state (iii) exists and is stable with the actuator unloaded (no negative
+    eigenvalue of its tangent stiffness); otherwise ``reason`` says why (status "second
+    state unstable: ..." when (iii) exists but is unstable). ``stability``: {"ii", "iii"}
+    -> `solver.stability.StateStability` (None: singular), "released" -> negative
+    eigenvalues of the released state.
+    released: state (iii) with the actuator and the four supports removed, relaxed under no
+    load with only the rigid-body motion held (the unit as an array holds it), placed with
+    the best-fit plane of the four side midpoints horizontal (`units.push3d.level`):
+    {"edges": {side: `edge_metrics`}, "S", "theta_deg", "curvature" (means over the sides,
+    as `S`, `theta_deg`, `curvature`), "shapes" (as ``shapes[state]``), "apex_height" (m,
+    `apex_height`), "moved" (largest node displacement from (iii), m),
+    "first_negative_eigenvalues" (of the equilibrium next to (iii) that Newton finds
+    first: > 0 when that symmetric state is unstable and the released state was found by
+    leaving it along a mode of negative curvature, as at h/L = 0.4: the frame warps, one
+    pair of opposite sides curling much more than the other)}; empty when the released
+    unit is not stable or its arches do not stay inverted (then ``self_standing`` is
+    False; None when not checked or not bistable).
+    """
 
     geometry: UnitGeometry
     status: str
@@ -193,6 +217,25 @@ class Unit2DResult:
     exact_states: bool = False
     solve_time: float = NAN
     n_nodes: int = 0
+    self_standing: bool | None = None
+    released: dict = field(default_factory=dict)
+    reason: str = ""
+    stability: dict = field(default_factory=dict)
+
+    @property
+    def S_released(self) -> float:
+        """Mean over the four sides of the chord in the released state (iii), m."""
+        return float(self.released.get("S", NAN))
+
+    @property
+    def theta_released_deg(self) -> float:
+        """Mean over the four sides of theta in the released state (iii), degrees."""
+        return float(self.released.get("theta_deg", NAN))
+
+    @property
+    def curvature_released(self) -> float:
+        """Mean over the four sides of the mean curvature in the released state (iii), 1/m."""
+        return float(self.released.get("curvature", NAN))
 
     @property
     def theta_deg(self) -> float:
@@ -215,33 +258,120 @@ class Unit2DResult:
     def summary(self) -> dict:
         out = {k: getattr(self, k) for k in ("status", "bistable", "F_cr", "d_cr",
                                              "d_unstable", "d_second", "S", "theta_deg",
-                                             "curvature", "solve_time", "n_nodes")}
+                                             "curvature", "self_standing", "S_released",
+                                             "theta_released_deg", "curvature_released",
+                                             "reason", "solve_time", "n_nodes")}
         for side, m in self.edges.get("iii", {}).items():
             for k, v in m.items():
                 out[f"{side}_{k}"] = v
+        for side, m in self.released.get("edges", {}).items():
+            for k, v in m.items():
+                out[f"{side}_{k}_released"] = v
         return out
 
 
+def _state_shapes(model: Unit2DModel, pos) -> dict:
+    pos = np.asarray(pos)
+    out = {side: pos[n] for side, n in model.sides.items()}
+    out.update(arch_x=pos[model.arches["x"]], arch_y=pos[model.arches["y"]])
+    out["rods"] = {rod.name: pos[rod.nodes] for rod in model.mesh.rods}
+    return out
+
+
+def _mean_metrics(edges: dict) -> dict:
+    return {k: float(np.mean([edges[s][k] for s in SIDES])) for k in ("S", "theta_deg",
+                                                                     "curvature")}
+
+
+def released_supports_2d(model: Unit2DModel):
+    """A statically determinate set of supports that holds only the rigid-body motion of the
+    2-D unit: (node, components) at the side midpoints (where the supports were): south x,
+    y, z; north x, z (no turning about z or x); east z (no turning about y). Under no load
+    their reactions vanish, so they place the released unit without straining it."""
+    south, east, north, _ = (int(n) for n in model.supports)
+    return [(south, "xyz"), (north, "xz"), (east, "z")]
+
+
+def apex_height(model: Unit2DModel, positions) -> float:
+    """Height (m) of the apex above the mean height of the four side midpoints: h in the
+    stress-free state, < 0 in the second state (the arches inverted)."""
+    P = np.asarray(positions)
+    return float(P[model.push_node, 2] - np.mean(P[model.supports, 2]))
+
+
+def released_state_2d(g, model: Unit2DModel, q_iii, nodes, nu):
+    """State (iii) of ``model`` (full state ``q_iii``) released: the unit rebuilt without
+    actuator and supports, its rigid-body motion held by `released_supports_2d`, relaxed
+    under no load (`units.push3d.relax_released`). It is self-standing when that state is
+    stable and the apex stays nearer its height in (iii) than its stress-free height h
+    (`apex_height`; not the planar unit's "moves less than h / 4": the released frame may
+    warp by more than that while the arches stay inverted). Returns (self_standing,
+    released dict or None, negative eigenvalues or None, why not self-standing ("" when it
+    is))."""
+    free = build_unit_mesh_2d(g, nodes=nodes, nu=nu, actuator=False, supports=False)
+    st = free.mesh.to_structure()  # same rods, same node numbers (the actuator adds no rod)
+    for node, comps in released_supports_2d(free):
+        st.fix(node, comps)
+    q0 = transfer_state(model.mesh, q_iii, free.mesh, st)
+    q, neg, moved, why, first = relax_released(st, q0)
+    if why:
+        return False, None, neg, why
+    # placed as the actuated unit stands: the side midpoints' best-fit plane at z = 0 (the
+    # metrics below measure angles against the vertical)
+    pos = level(st.positions_of(q), free.supports, free.mesh.positions)
+    z_iii = apex_height(free, st.positions_of(q0))
+    z_rel = apex_height(free, pos)
+    if not z_rel < 0.5 * (g.h + z_iii):
+        return False, None, neg, (f"without the actuator the apex rises to {z_rel:.3g} m above "
+                                  "the side midpoints: the unit does not stay in its second "
+                                  "state")
+    edges = {side: edge_metrics(pos[n]) for side, n in free.sides.items()}
+    rel = {"edges": edges, **_mean_metrics(edges), "shapes": _state_shapes(free, pos),
+           "apex_height": z_rel, "moved": moved, "first_negative_eigenvalues": first}
+    return True, rel, neg, ""
+
+
 def simulate_unit_2d(g: UnitGeometry, nodes: int | None = None, nu: float = PETG_NU,
-                     steps: int = 60, critical: bool = False) -> Unit2DResult:
+                     steps: int = 60, critical: bool = False,
+                     check_self_standing: bool = True) -> Unit2DResult:
     """Push the 2-D unit's apex down until it snaps; F_cr, the d's and each side's S, theta
-    and curvature in the second stable state. Failures come back in ``status``."""
+    and curvature in the second stable state, and (``check_self_standing``) in the released
+    state (iii) (actuator and supports removed; see `Unit2DResult`). Arguments are validated
+    (ValueError naming the parameter); failures of the solve come back in ``status``."""
     nodes = DEFAULT_NODES_2D if nodes is None else nodes
+    if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) \
+            or not 1 <= steps <= 100000:
+        raise ValueError(f"steps (first step = 3 h / steps) must be an integer in [1, 100000]; "
+                         f"got {steps!r}")
+    for name, flag in (("critical", critical), ("check_self_standing", check_self_standing)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise ValueError(f"{name} must be True or False; got {flag!r}")
     t0 = time.perf_counter()
     model = build_unit_2d(g, nodes=nodes, nu=nu)
-    out = push_through(model.structure, model.push_node, 3.0 * g.h, steps=steps,
-                       critical=critical)
+    out = push_through(model.structure, model.push_node, 3.0 * g.h, steps=int(steps),
+                       critical=bool(critical))
     r = Unit2DResult(g, out.status, bistable=out.bistable, F_cr=out.F_cr, d_cr=out.d_cr,
                      d_unstable=out.d_unstable, d_second=out.d_second, curve=out.curve,
-                     path_status=out.path_status, exact_states=out.exact_states)
+                     path_status=out.path_status, exact_states=out.exact_states,
+                     reason=out.reason, stability=dict(out.stability))
     states = dict(out.states)
     states["0"] = model.mesh.positions
     for state, pos in states.items():
         pos = np.asarray(pos)
-        r.shapes[state] = {side: pos[n] for side, n in model.sides.items()}
-        r.shapes[state].update(arch_x=pos[model.arches["x"]], arch_y=pos[model.arches["y"]])
-        r.shapes[state]["rods"] = {rod.name: pos[rod.nodes] for rod in model.mesh.rods}
+        r.shapes[state] = _state_shapes(model, pos)
+        if state == "iii" and not r.bistable:
+            continue  # as the planar unit: the shape, but no S or theta of an unstable (iii)
         r.edges[state] = {side: edge_metrics(pos[n]) for side, n in model.sides.items()}
+    if r.bistable and check_self_standing:
+        try:
+            ok, rel, neg, why = released_state_2d(g, model, out.full_states["iii"], nodes, nu)
+        except Exception as exc:  # noqa: BLE001 - a failed release is reported, not raised
+            ok, rel, neg, why = False, None, None, f"{type(exc).__name__}: {exc}"
+        r.self_standing = ok
+        r.released = rel or {}
+        r.stability["released"] = neg
+        if why:
+            r.stability["released_reason"] = why
     r.solve_time = time.perf_counter() - t0
     r.n_nodes = model.mesh.n_nodes
     return r
@@ -250,8 +380,10 @@ def simulate_unit_2d(g: UnitGeometry, nodes: int | None = None, nu: float = PETG
 # ---------------------------------------------------------------------------------------------
 # The 2-D unit as a point solver of the design-map pipeline (`pipeline.solvers`, kind "unit2d")
 
-#: status codes of a 2-D unit map point
-MAP_STATUS = {0: "ok", 1: "monostable", 2: "not_converged", 3: "invalid_geometry", 4: "timeout"}
+#: status codes of a 2-D unit map point (5: state (iii) exists but is unstable, as the planar
+#: map's code 5)
+MAP_STATUS = {0: "ok", 1: "monostable", 2: "not_converged", 3: "invalid_geometry", 4: "timeout",
+              5: "second_state_unstable"}
 
 
 def solve_map_point(h_over_L, t_over_L, w_over_L=0.05, b_over_L=0.0, resolution=DEFAULT_NODES_2D,
@@ -259,7 +391,9 @@ def solve_map_point(h_over_L, t_over_L, w_over_L=0.05, b_over_L=0.0, resolution=
     """One point of the 2-D unit's map, dimensionless (L = 0.1 m, E = PETG; the results are
     scale free): F_cr L^2 / (E I) with I = w t^3 / 12, d / L, and in state (iii) the mean over
     the sides of S / L, theta (deg) and curvature x L, and the largest difference of theta
-    between sides (deg; 0 for a symmetric second state). Never raises."""
+    between sides (deg; 0 for a symmetric second state); self_standing and the same means,
+    spread and per-side values in the released state (iii) (actuator and supports removed),
+    where it is self-standing. Never raises."""
     L = 0.1
     rec = {"status": 2, "message": ""}
     try:
@@ -275,14 +409,29 @@ def solve_map_point(h_over_L, t_over_L, w_over_L=0.05, b_over_L=0.0, resolution=
     rec.update(F_cr=r.F_cr * L**2 / EI, d_cr=r.d_cr / L, d_unstable=r.d_unstable / L,
                d_second=r.d_second / L, S=r.S / L, theta=r.theta_deg,
                curvature=r.curvature * L, message=r.status if r.status != "ok" else "")
-    e = r.edges.get("iii")
-    rec["theta_spread"] = (max(v["theta_deg"] for v in e.values())
-                           - min(v["theta_deg"] for v in e.values())) if e else math.nan
-    rec["edge_theta"] = np.array([e[s]["theta_deg"] for s in SIDES] if e else [math.nan] * 4)
-    rec["edge_curvature"] = np.array([e[s]["curvature"] * L for s in SIDES] if e
-                                     else [math.nan] * 4)
-    rec["status"] = 0 if r.status == "ok" else (1 if r.status == "monostable" else 2)
-    rec["bistable"] = 1 if r.bistable else (0 if rec["status"] == 1 else -1)
+
+    def per_side(edges):
+        if not edges:
+            return math.nan, np.full(4, math.nan), np.full(4, math.nan)
+        th = np.array([edges[s]["theta_deg"] for s in SIDES])
+        return float(np.ptp(th)), th, np.array([edges[s]["curvature"] * L for s in SIDES])
+
+    rec["theta_spread"], rec["edge_theta"], rec["edge_curvature"] = per_side(r.edges.get("iii"))
+    rel = r.released.get("edges") if r.self_standing else None
+    rec.update(S_released=r.S_released / L, theta_released=r.theta_released_deg,
+               curvature_released=r.curvature_released * L)
+    (rec["theta_spread_released"], rec["edge_theta_released"],
+     rec["edge_curvature_released"]) = per_side(rel)
+    if r.status == "ok":
+        rec["status"] = 0
+    elif r.status == "monostable":
+        rec["status"] = 1
+    elif r.status.startswith("second state unstable"):
+        rec["status"] = 5
+    else:
+        rec["status"] = 2
+    rec["bistable"] = 1 if r.bistable else (0 if rec["status"] in (1, 5) else -1)
+    rec["self_standing"] = -1 if r.self_standing is None else int(bool(r.self_standing))
     return rec
 
 
@@ -313,13 +462,30 @@ def _map_spec():
             "theta": ("degree", "angle between the end tangents of a side in state (iii), mean"),
             "curvature": ("1", "mean curvature of a side in state (iii) times L, mean of the four"),
             "theta_spread": ("degree", "largest difference of theta between the sides in (iii)"),
+            "S_released": ("1", "chord of a side in the released state (iii) (actuator and "
+                                "supports removed), mean of the four, S / L"),
+            "theta_released": ("degree", "angle between the end tangents of a side in the "
+                                         "released state (iii), mean of the four"),
+            "curvature_released": ("1", "mean curvature of a side in the released state (iii) "
+                                        "times L, mean of the four"),
+            "theta_spread_released": ("degree", "largest difference of theta between the sides "
+                                                "in the released state (iii)"),
         },
-        flag_vars={"bistable": ("1", "1 when the second stable state (iii) exists")},
+        flag_vars={"bistable": ("1", "1 when the second stable state (iii) exists and is "
+                                     "stable, 0 when not (monostable or (iii) unstable)"),
+                   "self_standing": ("1", "1 when state (iii) stays stable, arches inverted, "
+                                          "with the actuator and supports removed; 0 when "
+                                          "not; -1 unknown or not bistable")},
         array_vars={
             "edge_theta": (("side",), (4,), "degree",
                            "theta of each side (south, east, north, west) in state (iii)"),
             "edge_curvature": (("side",), (4,), "1",
                                "mean curvature of each side in state (iii) times L"),
+            "edge_theta_released": (("side",), (4,), "degree",
+                                    "theta of each side in the released state (iii)"),
+            "edge_curvature_released": (("side",), (4,), "1",
+                                        "mean curvature of each side in the released state "
+                                        "(iii) times L"),
         },
         status_codes=dict(MAP_STATUS),
         failure_statuses=("not_converged", "timeout", "invalid_geometry"),
@@ -327,7 +493,8 @@ def _map_spec():
                           "edge_theta", "edge_curvature"),
         options={"w_over_L": 0.05, "b_over_L": 0.0, "resolution": DEFAULT_NODES_2D},
         presets=_map_presets(),
-        sources=("solver", "units.unit2d", "units.frame3d", "units.push3d"),
+        sources=("solver", "units.unit2d", "units.frame3d", "units.push3d", "units.planar",
+                 "units.geometry"),
         title="snapmorph map of the 2-D unit (square frame, two crossing arches)",
     )
 

@@ -5,6 +5,7 @@ imperfections the paper saw (issue 14), on the 3-D discrete elastic rods of `sol
     >>> from units.frame3d import UnitGeometry
     >>> r = simulate_unit_3d(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3), tilt_deg=2)
     >>> r.F_cr, r.theta_deg, r.arch_tilt_deg, r.rail_twist_deg
+    >>> r.self_standing, r.S_released, r.theta_released_deg   # actuator and rollers removed
 
 Geometry (x along the base, y across it, z up; `../shared/unit-model.md`, docs/unit3d.md):
 - the base is a frame of outer width 4w: two side rails of width w (centrelines y = ±1.5 w)
@@ -50,7 +51,7 @@ from units.frame3d import (
     end_tangent_angle,
     segment_points,
 )
-from units.push3d import PushOutcome, push_through
+from units.push3d import PushOutcome, level, push_through, relax_released, transfer_state
 
 __all__ = ["Unit3DModel", "Unit3DResult", "build_unit_mesh_3d", "build_unit_3d",
            "simulate_unit_3d", "DEFAULT_NODES_3D"]
@@ -74,26 +75,27 @@ class Unit3DModel:
     supports: np.ndarray
 
 
-def _check_imperfections(tilt_deg, apex_offset, actuator_offset, g):
-    def real(name, value, unit, meaning):
-        try:
-            v = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"{name} ({meaning}, {unit}) must be a number; got {value!r}") from None
-        if isinstance(value, bool) or not math.isfinite(v):
-            raise ValueError(f"{name} ({meaning}, {unit}) must be a finite number; got {value!r}")
-        return v
+def _real(name, value, unit, meaning):
+    """``value`` as a finite float, or a ValueError naming the parameter."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} ({meaning}, {unit}) must be a number; got {value!r}") from None
+    if isinstance(value, (bool, np.bool_)) or not math.isfinite(v):
+        raise ValueError(f"{name} ({meaning}, {unit}) must be a finite number; got {value!r}")
+    return v
 
-    tilt = real("tilt_deg", tilt_deg, "degrees", "arch tilt about the base axis")
+
+def _check_imperfections(tilt_deg, apex_offset, actuator_offset, g):
+    tilt = _real("tilt_deg", tilt_deg, "degrees", "arch tilt about the base axis")
     if not -45.0 <= tilt <= 45.0:
         raise ValueError(f"tilt_deg (arch tilt about the base axis, degrees) must be in "
                          f"[-45, 45]; got {tilt!r}")
-    dy = real("apex_offset", apex_offset, "m", "sideways offset of the apex")
+    dy = _real("apex_offset", apex_offset, "m", "sideways offset of the apex")
     if abs(dy) > g.h:
         raise ValueError(f"apex_offset (sideways offset of the apex, m) must be within "
                          f"[-h, h] = [{-g.h:.6g}, {g.h:.6g}] m; got {dy!r}")
-    dx = real("actuator_offset", actuator_offset, "m", "actuator position from mid-span")
+    dx = _real("actuator_offset", actuator_offset, "m", "actuator position from mid-span")
     lim = 0.25 * g.arch_span
     if abs(dx) > lim:
         raise ValueError(f"actuator_offset (actuator position from mid-span along x, m) must "
@@ -142,7 +144,7 @@ def build_unit_mesh_3d(
     if g.h <= 0:
         raise ValueError("h (arch apex height, m) must be > 0 for a 3-D unit; got 0")
     nodes = _check_nodes(nodes)
-    nu = float(nu)
+    nu = _real("nu", nu, "-", "Poisson's ratio")
     if not -1.0 < nu <= 0.5:
         raise ValueError(f"nu (Poisson's ratio) must be in (-1, 0.5]; got {nu!r}")
     tilt, dy, dx = _check_imperfections(tilt_deg, apex_offset, actuator_offset, g)
@@ -158,8 +160,9 @@ def build_unit_mesh_3d(
     # "stiff": cross bars 10x thicker (1000x stiffer in bending and twist): the end plates
     # keep their shape across the width, as the planar model assumes (a diagnostic)
     t_bar = g.t * (10.0 if end_plate == "stiff" else 1.0)
-    brace_width = x0 if brace_width is None else float(brace_width)
-    if not (math.isfinite(brace_width) and brace_width > 0):
+    brace_width = x0 if brace_width is None else _real("brace_width", brace_width, "m",
+                                                      "width of the end plates' braces")
+    if not brace_width > 0:
         raise ValueError(f"brace_width (width of the end plates' braces, m) must be > 0; "
                          f"got {brace_width!r}")
     spacing = L / (nodes - 1)
@@ -323,6 +326,26 @@ class Unit3DResult:
     shapes[state] = {"rail_left", "rail_right", "arch", "base"} (n, 3) positions (base: the
     mean of the two rails, the planar model's base line), and "rods": every rod by name;
     ``reference``: the same for the stress-free state.
+
+    S, theta_deg and base_shape are those of state (iii) and exist only when the unit is
+    bistable: state (iii) found as an equilibrium and stable with the actuator unloaded
+    (no negative eigenvalue of its tangent stiffness); otherwise ``reason`` says why
+    (status "second state unstable: ..." when (iii) exists but is unstable).
+
+    released: state (iii) with the actuator (rigid group, head and the push point's xy
+    support) and the rollers removed, relaxed under no load with only the rigid-body motion
+    held — the unit as an array holds it — and placed with the rails' nodes on the roller
+    lines in a horizontal plane (`units.push3d.level`): {"S", "theta_deg" (as S and theta_deg),
+    "base_shape", "rail_left", "rail_right", "arch" (n, 3), "rods", "rail_twist_deg",
+    "arch_tilt_deg", "arch_lateral", "moved" (largest node displacement from (iii), m),
+    "first_negative_eigenvalues" (of the equilibrium next to (iii) Newton finds first: 0
+    when that is the released state; > 0 when it is unstable and the released state was
+    found by leaving it along a mode of negative curvature, `units.push3d.relax_released`)};
+    empty when the released unit is not stable or moves more than h / 4 from (iii) (the
+    planar unit's test; then ``self_standing`` is False; None when not checked or not
+    bistable).
+    stability: {"ii", "iii"} -> `solver.stability.StateStability` with the actuator
+    unloaded (None: singular), "released" -> negative eigenvalues of the released state.
     """
 
     geometry: UnitGeometry
@@ -346,14 +369,30 @@ class Unit3DResult:
     exact_states: bool = False
     solve_time: float = NAN
     n_nodes: int = 0
+    self_standing: bool | None = None
+    released: dict = field(default_factory=dict)
+    reason: str = ""
+    stability: dict = field(default_factory=dict)
+
+    @property
+    def S_released(self) -> float:
+        """Chord (m) of the released state (iii); NaN when the released unit is not stable."""
+        return float(self.released.get("S", NAN))
+
+    @property
+    def theta_released_deg(self) -> float:
+        """Turning (degrees) of the released state (iii); NaN when it is not stable."""
+        return float(self.released.get("theta_deg", NAN))
 
     def summary(self) -> dict:
         keys = ("status", "bistable", "F_cr", "d_cr", "d_unstable", "d_second", "S",
-                "theta_deg", "solve_time", "n_nodes")
+                "theta_deg", "self_standing", "S_released", "theta_released_deg", "reason",
+                "solve_time", "n_nodes")
         out = {k: getattr(self, k) for k in keys}
         for name in ("arch_tilt_deg", "rail_twist_deg", "arch_lateral"):
             for state, v in getattr(self, name).items():
                 out[f"{name}_{state}"] = v
+            out[f"{name}_released"] = float(self.released.get(name, NAN))
         out.update({f"imperfection_{k}": v for k, v in self.imperfection.items()})
         return out
 
@@ -399,6 +438,73 @@ def unit3d_metrics(model: Unit3DModel, positions) -> dict:
     }
 
 
+def _check_flag(name, value):
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False; got {value!r}")
+    return bool(value)
+
+
+def _check_steps(steps):
+    if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) \
+            or not 1 <= steps <= 100000:
+        raise ValueError(f"steps (first step = 3 h / steps) must be an integer in [1, 100000]; "
+                         f"got {steps!r}")
+    return int(steps)
+
+
+def released_supports(model: Unit3DModel):
+    """A statically determinate set of supports that holds only the rigid-body motion of the
+    unit: (node, components). The rails' nodes on the roller lines: the left rail's at the
+    first line all of x, y, z, the right rail's there x and z (no turning about z or x), the
+    left rail's at the second line z (no turning about y). Under no load their reactions
+    vanish, so they place the released unit without straining it (as the rollers would)."""
+    sup = set(model.supports.tolist())
+    X = model.mesh.positions
+
+    def on_lines(rail):
+        k = [int(n) for n in rail if int(n) in sup]
+        if len(k) < 2:  # no roller line in the mesh: the rails' ends
+            k = [int(rail[0]), int(rail[-1])]
+        k.sort(key=lambda n: X[n, 0])
+        return k[0], k[-1]
+
+    l0, l1 = on_lines(model.rail_left)
+    r0, _ = on_lines(model.rail_right)
+    return [(l0, "xyz"), (r0, "xz"), (l1, "z")]
+
+
+def released_state_3d(g, model: Unit3DModel, q_iii, build_options: dict):
+    """State (iii) of ``model`` (full state ``q_iii``) released: the unit rebuilt without
+    actuator and rollers, its rigid-body motion held by `released_supports`, relaxed under no
+    load. Returns (self_standing, metrics dict or None, negative eigenvalues or None, why
+    not self-standing ("" when it is))."""
+    free = build_unit_mesh_3d(g, actuator=False, supports=False, **build_options)
+    st = free.mesh.to_structure()
+    for node, comps in released_supports(free):
+        st.fix(node, comps)
+    q0 = transfer_state(model.mesh, q_iii, free.mesh, st)
+    q, neg, moved, why, first = relax_released(st, q0)
+    if not why and not moved <= 0.25 * g.h:  # the planar unit's test
+        why = (f"without the actuator the unit moves {moved:.3g} m (> h / 4) away from state "
+               "(iii): it does not stay in its second state")
+    if why:
+        return False, None, neg, why
+    # placed as the actuated unit stands: the rails' nodes on the roller lines in a
+    # horizontal plane (rail twist and theta are measured against the vertical)
+    sup = set(free.supports.tolist())
+    rollers = [int(n) for n in np.concatenate([free.rail_left, free.rail_right]) if int(n) in sup]
+    pos = level(st.positions_of(q), rollers or [n for n, _ in released_supports(free)],
+                free.mesh.positions)
+    m = unit3d_metrics(free, pos)
+    rel = {"S": m["S"], "theta_deg": m["theta_deg"], "base_shape": m["base"].copy()}
+    rel.update({k: m[k] for k in ("rail_left", "rail_right", "arch", "rail_twist_deg",
+                                  "arch_tilt_deg", "arch_lateral")})
+    rel["rods"] = {rod.name: np.array(pos[rod.nodes]) for rod in free.mesh.rods}
+    rel["moved"] = moved
+    rel["first_negative_eigenvalues"] = first
+    return True, rel, neg, ""
+
+
 def simulate_unit_3d(
     g: UnitGeometry,
     nodes: int | None = None,
@@ -412,19 +518,27 @@ def simulate_unit_3d(
     bond: str = "joint",
     brace_width: float | None = None,
     end_plate: str = "elastic",
+    check_self_standing: bool = True,
 ) -> Unit3DResult:
     """Push the 3-D unit's actuator down until it snaps; the planar metrics plus arch tilt,
     rail twist and sideways motion of the arch (see `Unit3DResult`).
 
     ``nodes``: resolution (nodes along a rail; None = DEFAULT_NODES_3D); ``steps``: first
-    step as a fraction of 3 h; ``critical``: detect bifurcations on the path (slower).
-    Never raises for a unit that can be built: failures come back in ``status``.
+    step as a fraction of 3 h; ``critical``: detect bifurcations on the path (slower);
+    ``check_self_standing``: also release the bistable unit's state (iii) (actuator and
+    rollers removed) and report ``released`` and ``self_standing`` (as the planar unit).
+    Arguments are validated (ValueError naming the parameter); after that it never raises
+    for a unit that can be built: failures come back in ``status`` and ``reason``.
     """
     nodes = DEFAULT_NODES_3D if nodes is None else nodes
+    steps = _check_steps(steps)
+    critical = _check_flag("critical", critical)
+    check_self_standing = _check_flag("check_self_standing", check_self_standing)
     t0 = time.perf_counter()
-    model = build_unit_3d(g, nodes=nodes, tilt_deg=tilt_deg, apex_offset=apex_offset,
-                          actuator_offset=actuator_offset, nu=nu, bar_divisions=bar_divisions,
-                          bond=bond, brace_width=brace_width, end_plate=end_plate)
+    options = dict(nodes=nodes, tilt_deg=tilt_deg, apex_offset=apex_offset,
+                   actuator_offset=actuator_offset, nu=nu, bar_divisions=bar_divisions,
+                   bond=bond, brace_width=brace_width, end_plate=end_plate)
+    model = build_unit_3d(g, **options)
     imperfection = {"tilt_deg": float(tilt_deg), "apex_offset": float(apex_offset),
                     "actuator_offset": float(actuator_offset)}
     out: PushOutcome = push_through(model.structure, model.push_node, 3.0 * g.h, steps=steps,
@@ -432,7 +546,8 @@ def simulate_unit_3d(
     r = Unit3DResult(g, out.status, imperfection=imperfection, curve=out.curve,
                      path_status=out.path_status, F_cr=out.F_cr, d_cr=out.d_cr,
                      d_unstable=out.d_unstable, d_second=out.d_second,
-                     bistable=out.bistable, exact_states=out.exact_states)
+                     bistable=out.bistable, exact_states=out.exact_states,
+                     reason=out.reason, stability=dict(out.stability))
     r.reference = unit3d_metrics(model, model.mesh.positions)
     r.reference["rods"] = {rod.name: rod.xyz.copy() for rod in model.mesh.rods}
     for state, pos in out.states.items():
@@ -442,8 +557,18 @@ def simulate_unit_3d(
         r.arch_tilt_deg[state] = m["arch_tilt_deg"]
         r.rail_twist_deg[state] = m["rail_twist_deg"]
         r.arch_lateral[state] = m["arch_lateral"]
-        if state == "iii":
+        if state == "iii" and r.bistable:
             r.S, r.theta_deg, r.base_shape = m["S"], m["theta_deg"], m["base"].copy()
+    if r.bistable and check_self_standing:
+        try:
+            ok, rel, neg, why = released_state_3d(g, model, out.full_states["iii"], options)
+        except Exception as exc:  # noqa: BLE001 - a failed release is reported, not raised
+            ok, rel, neg, why = False, None, None, f"{type(exc).__name__}: {exc}"
+        r.self_standing = ok
+        r.released = rel or {}
+        r.stability["released"] = neg
+        if why:
+            r.stability["released_reason"] = why
     r.solve_time = time.perf_counter() - t0
     r.n_nodes = model.mesh.n_nodes
     return r

@@ -10,8 +10,9 @@ from snapmorph.commands._common import (format_value, integer, length_mm, number
 HELP = """Simulate the paper's 2-D unit: a square frame base of side L made of strips of width w,
 with two arches joining opposite midpoints of its sides and crossing (bonded) at the apex,
 pushed down at the apex. Reports F_cr, the equilibrium displacements, bistability and, for
-each side of the square in the second stable state, the chord S, the angle theta between its
-end tangents and its mean curvature. Lengths in millimetres, E in pascals (the Python API,
+each side of the square in the second stable state, actuated and released (actuator and
+supports removed), the chord S, the angle theta between its end tangents and its mean
+curvature. Lengths in millimetres, E in pascals (the Python API,
 units.unit2d, is SI)."""
 
 
@@ -58,12 +59,24 @@ def run(args: argparse.Namespace) -> int:
             ("F_cr", format_value(r.F_cr), "N"), ("d_cr", format_value(r.d_cr, 1e3), "mm"),
             ("d_unstable (ii)", format_value(r.d_unstable, 1e3), "mm"),
             ("d_second (iii)", format_value(r.d_second, 1e3), "mm"),
+            ("S (mean)", format_value(r.S, 1e3), "mm"),
+            ("theta (mean)", format_value(r.theta_deg), "deg"),
+            ("self-standing", format_value(r.self_standing), ""),
+            ("S released (mean)", format_value(r.S_released, 1e3), "mm"),
+            ("theta released (mean)", format_value(r.theta_released_deg), "deg"),
             ("nodes", str(r.n_nodes), ""), ("solve time", format_value(r.solve_time, 1.0, 3), "s")]
     for name, value, unit in rows:
-        print(f"  {name:<20} {value:>12} {unit}")
-    edges = r.edges.get("iii")
-    if edges:
-        print("  sides in state (iii):   S (mm)   theta (deg)   curvature (1/m)   sag (mm)")
+        print(f"  {name:<22} {value:>12} {unit}")
+    if r.reason and not r.bistable:
+        print(f"  not bistable: {r.reason}")
+    elif r.self_standing is False:
+        print(f"  not self-standing: {r.stability.get('released_reason', '')}")
+    for title, edges in (("state (iii)", r.edges.get("iii")),
+                         ("the released state (iii)", r.released.get("edges"))):
+        if not edges:
+            continue
+        print(f"  sides in {title}:")
+        print("    side             S (mm)   theta (deg)   curvature (1/m)   sag (mm)")
         for side in SIDES:
             m = edges[side]
             print(f"    {side:<8} {format_value(m['S'], 1e3):>14} {format_value(m['theta_deg']):>13} "
@@ -81,4 +94,5 @@ def run(args: argparse.Namespace) -> int:
 
         plot_unit2d_states(r, plot)
         print(f"wrote {plot}")
-    return 0 if r.status in ("ok", "monostable") else 1
+    return 0 if (r.status in ("ok", "monostable")
+                 or r.status.startswith("second state unstable")) else 1

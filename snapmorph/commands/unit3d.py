@@ -11,7 +11,8 @@ HELP = """Simulate one bistable unit in 3-D: a rectangular frame base (two side 
 solid end regions of width 4w), the arch through the frame's hole, rollers and actuator, on
 3-D discrete elastic rods. Optional imperfections: the arch tilted about the base's axis, the
 apex offset sideways, the actuator off centre. Reports the planar metrics (F_cr, d's, S,
-theta) and the arch's tilt and the rails' twist in states (i)-(iii). Lengths in millimetres,
+theta, actuated and released: actuator and rollers removed) and the arch's tilt and the
+rails' twist in states (i)-(iii) and released. Lengths in millimetres,
 angles in degrees, E in pascals. (The Python API, units.unit3d, is SI throughout.)"""
 
 
@@ -51,6 +52,7 @@ def add_parser(sub):
 
 def run(args: argparse.Namespace) -> int:
     import json
+    import math
 
     plot = plot_file(args.plot)
     js = output_file(args.json, "--json")
@@ -82,10 +84,17 @@ def run(args: argparse.Namespace) -> int:
             ("d_unstable (ii)", format_value(r.d_unstable, 1e3), "mm"),
             ("d_second (iii)", format_value(r.d_second, 1e3), "mm"),
             ("S", format_value(r.S, 1e3), "mm"), ("theta", format_value(r.theta_deg), "deg")]
+    rel = r.released or {}
+    rows += [("self-standing", format_value(r.self_standing), ""),
+             ("S released", format_value(rel.get("S", math.nan), 1e3), "mm"),
+             ("theta released", format_value(rel.get("theta_deg", math.nan)), "deg")]
     for state in ("i", "ii", "iii"):
         rows.append((f"arch tilt ({state})", format_value(r.arch_tilt_deg.get(state)), "deg"))
+    rows.append(("arch tilt (released)", format_value(rel.get("arch_tilt_deg", math.nan)), "deg"))
     for state in ("i", "ii", "iii"):
         rows.append((f"rail twist ({state})", format_value(r.rail_twist_deg.get(state)), "deg"))
+    rows.append(("rail twist (released)", format_value(rel.get("rail_twist_deg", math.nan)),
+                 "deg"))
     rows += [("nodes", str(r.n_nodes), ""), ("solve time", format_value(r.solve_time, 1.0, 3), "s")]
     print(f"unit3d L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm, "
           f"tilt={args.tilt:g} deg, apex offset={args.apex_offset:g} mm, actuator offset="
@@ -93,12 +102,21 @@ def run(args: argparse.Namespace) -> int:
     planar_rows = {"F_cr": (planar.F_cr, 1.0), "d_cr": (planar.d_cr, 1e3),
                    "d_unstable (ii)": (planar.d_unstable, 1e3),
                    "d_second (iii)": (planar.d_second, 1e3), "S": (planar.S, 1e3),
-                   "theta": (planar.theta_deg, 1.0)} if planar else {}
+                   "theta": (planar.theta_deg, 1.0),
+                   "self-standing": (planar.self_standing, None),
+                   "S released": (planar.S_released, 1e3),
+                   "theta released": (planar.theta_released_deg, 1.0)} if planar else {}
     for name, value, unit in rows:
         extra = ""
         if name in planar_rows:
-            extra = f"   planar {format_value(planar_rows[name][0], planar_rows[name][1]):>10}"
-        print(f"  {name:<20} {value:>12} {unit:<4}{extra}")
+            v, scale = planar_rows[name]
+            shown = format_value(v) if scale is None else format_value(v, scale)
+            extra = f"   planar {shown:>10}"
+        print(f"  {name:<22} {value:>12} {unit:<4}{extra}")
+    if r.reason and not r.bistable:
+        print(f"  not bistable: {r.reason}")
+    elif r.self_standing is False:
+        print(f"  not self-standing: {r.stability.get('released_reason', '')}")
     if js:
         payload = {k: (None if isinstance(v, float) and v != v else v)
                    for k, v in r.summary().items()}
@@ -112,4 +130,5 @@ def run(args: argparse.Namespace) -> int:
 
         plot_unit3d_states(r, plot, planar=planar)
         print(f"wrote {plot}")
-    return 0 if r.status in ("ok", "monostable") else 1
+    return 0 if (r.status in ("ok", "monostable")
+                 or r.status.startswith("second state unstable")) else 1
