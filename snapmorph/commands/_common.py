@@ -110,6 +110,29 @@ def integer(low=None, high=None, *, what: str = ""):
     return parse
 
 
+def add_unit_dimensions(p, *, L_what: str = "base length", L_help: str = "base length, mm",
+                        flat_ok: bool = False, b_help: str = "extra flat length of the arch "
+                        "ends, mm (default 0; the paper's specimens use b = w)",
+                        nu: bool = False) -> None:
+    """The unit commands' dimension options --L --h --t --w --b --E (and --nu): mm and Pa,
+    each failing with one line naming the option, its unit and its range. ``flat_ok``:
+    h = 0 (an arch-less unit) is accepted."""
+    p.add_argument("--L", type=length_mm(what=L_what), required=True, help=L_help)
+    p.add_argument("--h", type=length_mm(0, low_inclusive=flat_ok, what="arch apex height"),
+                   required=True, help="arch apex height, mm" + (" (0 = arch-less)" if flat_ok
+                                                                  else ""))
+    p.add_argument("--t", type=length_mm(what="sheet thickness"), required=True,
+                   help="sheet thickness, mm")
+    p.add_argument("--w", type=length_mm(what="strip width"), required=True, help="strip width, mm")
+    p.add_argument("--b", type=length_mm(0.0, low_inclusive=True, what="extra flat length"),
+                   default=0.0, help=b_help)
+    p.add_argument("--E", type=number("Pa", 0.0, what="Young's modulus"), default=2.2e9,
+                   help="Young's modulus, Pa (default 2.2e9, PETG)")
+    if nu:
+        p.add_argument("--nu", type=number("", -1.0, 0.5, what="Poisson's ratio"), default=0.38,
+                       help="Poisson's ratio (default 0.38, PETG)")
+
+
 def _check_parent(path: Path, option: str) -> None:
     """Create the missing folders above `path`; refuse a parent that is a file."""
     parent = path.parent

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import format_value, integer, length_mm, number
+from snapmorph.commands._common import (add_unit_dimensions, format_value, integer, length_mm,
+                                        number)
 
 HELP = """Simulate one bistable unit: push its apex down until it snaps, and report F_cr,
 the equilibrium displacements, S, theta (actuated and released) and the energies. Lengths on
@@ -14,17 +15,7 @@ solver.unit, is SI throughout.)"""
 
 def add_parser(sub):
     p = sub.add_parser("unit", help="simulate one unit (lengths in mm)", description=HELP)
-    p.add_argument("--L", type=length_mm(what="base length"), required=True, help="base length, mm")
-    p.add_argument("--h", type=length_mm(0, low_inclusive=True, what="arch apex height"),
-                   required=True, help="arch apex height, mm (0 = arch-less)")
-    p.add_argument("--t", type=length_mm(what="sheet thickness"), required=True,
-                   help="sheet thickness, mm")
-    p.add_argument("--w", type=length_mm(what="strip width"), required=True, help="strip width, mm")
-    p.add_argument("--b", type=length_mm(0, low_inclusive=True, what="extra flat length"),
-                   default=0.0, help="extra flat length of the arch ends, mm (default 0; the "
-                   "paper's specimens use b = w)")
-    p.add_argument("--E", type=number("Pa", 0, what="Young's modulus"), default=2.2e9,
-                   help="Young's modulus, Pa (default 2.2e9, PETG)")
+    add_unit_dimensions(p, flat_ok=True)
     p.add_argument("--joint-length", type=length_mm(0, low_inclusive=True,
                                                     what="arch length held by the actuator"),
                    default=3.175, help="length of arch held straight by the actuator stem, mm "

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import (format_value, integer, length_mm, number, output_file,
-                                         plot_file)
+from snapmorph.commands._common import (add_unit_dimensions, format_value, integer, output_file,
+                                        plot_file)
 
 HELP = """Simulate the paper's 2-D unit: a square frame base of side L made of strips of width w,
 with two arches joining opposite midpoints of its sides and crossing (bonded) at the apex,
@@ -19,20 +19,9 @@ units.unit2d, is SI)."""
 def add_parser(sub):
     p = sub.add_parser("unit2d", help="simulate the 2-D unit (square frame, crossing arches; mm)",
                        description=HELP)
-    p.add_argument("--L", type=length_mm(what="side of the square"), required=True,
-                   help="side of the square base, mm")
-    p.add_argument("--h", type=length_mm(what="arch apex height"), required=True,
-                   help="arch apex height, mm")
-    p.add_argument("--t", type=length_mm(what="sheet thickness"), required=True,
-                   help="sheet thickness, mm")
-    p.add_argument("--w", type=length_mm(what="strip width"), required=True, help="strip width, mm")
-    p.add_argument("--b", type=length_mm(0.0, low_inclusive=True, what="extra flat length"),
-                   default=0.0, help="extra flat length of the arch ends beyond the frame strip, "
-                   "mm (default 0)")
-    p.add_argument("--E", type=number("Pa", 0.0, what="Young's modulus"), default=2.2e9,
-                   help="Young's modulus, Pa (default 2.2e9, PETG)")
-    p.add_argument("--nu", type=number("", -1.0, 0.5, what="Poisson's ratio"), default=0.38,
-                   help="Poisson's ratio (default 0.38, PETG)")
+    add_unit_dimensions(p, L_what="side of the square", L_help="side of the square base, mm",
+                        b_help="extra flat length of the arch ends beyond the frame strip, "
+                        "mm (default 0)", nu=True)
     p.add_argument("--nodes", type=integer(11, 1001, what="nodes along a side"), default=None,
                    help="resolution: nodes along one side of the square (default 41)")
     p.add_argument("--plot", metavar="PNG", help="write the two stable states in perspective "

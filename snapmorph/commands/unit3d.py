@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import (format_value, integer, length_mm, number, output_file,
-                                         plot_file)
+from snapmorph.commands._common import (add_unit_dimensions, format_value, integer, number,
+                                        output_file, plot_file)
 
 HELP = """Simulate one bistable unit in 3-D: a rectangular frame base (two side rails of width w,
 solid end regions of width 4w), the arch through the frame's hole, rollers and actuator, on
@@ -19,19 +19,7 @@ angles in degrees, E in pascals. (The Python API, units.unit3d, is SI throughout
 def add_parser(sub):
     p = sub.add_parser("unit3d", help="simulate one unit in 3-D with imperfections (mm)",
                        description=HELP)
-    p.add_argument("--L", type=length_mm(what="base length"), required=True, help="base length, mm")
-    p.add_argument("--h", type=length_mm(what="arch apex height"), required=True,
-                   help="arch apex height, mm")
-    p.add_argument("--t", type=length_mm(what="sheet thickness"), required=True,
-                   help="sheet thickness, mm")
-    p.add_argument("--w", type=length_mm(what="strip width"), required=True, help="strip width, mm")
-    p.add_argument("--b", type=length_mm(0.0, low_inclusive=True, what="extra flat length"),
-                   default=0.0, help="extra flat length of the arch ends, mm (default 0; the "
-                   "paper's specimens use b = w)")
-    p.add_argument("--E", type=number("Pa", 0.0, what="Young's modulus"), default=2.2e9,
-                   help="Young's modulus, Pa (default 2.2e9, PETG)")
-    p.add_argument("--nu", type=number("", -1.0, 0.5, what="Poisson's ratio"), default=0.38,
-                   help="Poisson's ratio (default 0.38, PETG)")
+    add_unit_dimensions(p, nu=True)
     p.add_argument("--tilt", type=number("deg", -45.0, 45.0, low_inclusive=True,
                                          what="arch tilt about the base axis"), default=0.0,
                    help="arch tilt about the base's axis, degrees (default 0)")
