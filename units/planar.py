@@ -55,8 +55,23 @@ TIES = ("exact", "spring")
 BRANCHES = ("follow", "primary")
 
 
+class ReleasedMetrics:
+    """S and theta of the released state (iii) (actuator removed), read from a result's
+    ``released`` dict; shared by the planar, 3-D and 2-D units' results."""
+
+    @property
+    def S_released(self) -> float:
+        """Chord (m) of the released state (iii); NaN when the released unit is not stable."""
+        return float(self.released.get("S", NAN))
+
+    @property
+    def theta_released_deg(self) -> float:
+        """Turning (degrees) of the released state (iii); NaN when it is not stable."""
+        return float(self.released.get("theta_deg", NAN))
+
+
 @dataclass
-class UnitResult:
+class UnitResult(ReleasedMetrics):
     """Metrics of one unit (SI: N, m, J, degrees for angles). NaN where a field does not exist."""
 
     geometry: UnitGeometry
@@ -100,16 +115,6 @@ class UnitResult:
         if self.status.startswith("second state unstable"):
             return STATUS_CODES["second_state_unstable"]
         return STATUS_CODES["not_converged"]
-
-    @property
-    def S_released(self) -> float:
-        """Chord (m) of the released state (iii); NaN when the released unit is not stable."""
-        return float(self.released.get("S", NAN))
-
-    @property
-    def theta_released_deg(self) -> float:
-        """Turning (degrees) of the released state (iii); NaN when it is not stable."""
-        return float(self.released.get("theta_deg", NAN))
 
     def summary(self) -> dict:
         """The scalar metrics as a plain dict (SI)."""

@@ -51,6 +51,7 @@ from units.frame3d import (
     end_tangent_angle,
     segment_points,
 )
+from units.planar import ReleasedMetrics
 from units.push3d import PushOutcome, level, push_through, relax_released, transfer_state
 
 __all__ = ["Unit3DModel", "Unit3DResult", "build_unit_mesh_3d", "build_unit_3d",
@@ -312,7 +313,7 @@ def build_unit_3d(g: UnitGeometry, nodes: int = DEFAULT_NODES_3D, **options) -> 
 
 
 @dataclass
-class Unit3DResult:
+class Unit3DResult(ReleasedMetrics):
     """Metrics of the 3-D unit, SI (N, m, degrees), NaN where absent. The planar
     `UnitResult`'s metrics (F_cr, d_cr, d_unstable, d_second, S, theta_deg, bistable, shapes)
     plus the out-of-plane ones:
@@ -373,16 +374,6 @@ class Unit3DResult:
     released: dict = field(default_factory=dict)
     reason: str = ""
     stability: dict = field(default_factory=dict)
-
-    @property
-    def S_released(self) -> float:
-        """Chord (m) of the released state (iii); NaN when the released unit is not stable."""
-        return float(self.released.get("S", NAN))
-
-    @property
-    def theta_released_deg(self) -> float:
-        """Turning (degrees) of the released state (iii); NaN when it is not stable."""
-        return float(self.released.get("theta_deg", NAN))
 
     def summary(self) -> dict:
         keys = ("status", "bistable", "F_cr", "d_cr", "d_unstable", "d_second", "S",
