@@ -43,6 +43,7 @@ class DisplacementProbe:
         if it < 0:
             raise ConvergenceError(f"no equilibrium found at prescribed d = {d:.6g} m")
         self.system.accept(q)
+        self.last_state = q  # the full state solved last (3-D rods: with the twists)
         return self.structure.positions_of(q), c.force(self.system), self.system.negative_eigenvalues
 
 

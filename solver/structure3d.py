@@ -47,6 +47,7 @@ class Rod3D:
     thickness: np.ndarray  # (N-1,) m, along the face normal m1
     E: float  # Pa
     nu: float
+    J: np.ndarray | None = None  # (N-1,) m^4 torsion constant; None: a free strip's
 
     @cached_property
     def EA(self):
@@ -66,7 +67,8 @@ class Rod3D:
     @cached_property
     def GJ(self):
         """(N-1,) torsional stiffness, G = E / (2 (1 + nu)), N m^2."""
-        return self.E / (2.0 * (1.0 + self.nu)) * torsion_constant(self.width, self.thickness)
+        J = torsion_constant(self.width, self.thickness) if self.J is None else self.J
+        return self.E / (2.0 * (1.0 + self.nu)) * J
 
 
 def _finite_array(value, name, unit):
@@ -81,15 +83,15 @@ def _finite_array(value, name, unit):
     return arr
 
 
-def _per_edge(value, n_edges, name):
-    arr = _finite_array(value, name, "m")
+def _per_edge(value, n_edges, name, unit="m"):
+    arr = _finite_array(value, name, unit)
     if arr.ndim == 0:
         arr = np.full(n_edges, float(arr))
     if arr.shape != (n_edges,):
         raise ValueError(f"{name} must be a scalar or one value per edge, shape ({n_edges},) "
-                         f"(m); got shape {arr.shape}")
+                         f"({unit}); got shape {arr.shape}")
     if np.any(arr <= 0.0):
-        raise ValueError(f"{name} must be > 0 m; got min {arr.min()!r}")
+        raise ValueError(f"{name} must be > 0 {unit}; got min {arr.min()!r}")
     return arr
 
 
@@ -176,7 +178,7 @@ class Structure3D:
 
     # ------------------------------------------------------------------ building
     def add_rod(self, xyz, width, thickness, E, nu=0.38, normal=(0.0, 0.0, 1.0), *,
-                natural_curvature=None, natural_twist=None) -> Rod3D:
+                natural_curvature=None, natural_twist=None, torsion_constant=None) -> Rod3D:
         """Add a strip through the points ``xyz`` (N, 3) m; its shape is stress free.
 
         ``width``, ``thickness`` (m): scalars or one per edge (N-1,); ``E`` Young's modulus
@@ -186,6 +188,9 @@ class Structure3D:
         ``natural_curvature`` (1/m): (kappa1, kappa2) or one pair per interior node (N-2, 2),
         and ``natural_twist`` (rad/m): scalar or (N-2,), replace the natural curvature and
         twist read off the stress-free shape (e.g. a straight rod that wants to be a helix).
+        ``torsion_constant`` (m^4): scalar or one per edge, replaces the free strip's J of
+        `torsion_constant` (e.g. w t^3 / 3 for a strip cut out of a continuous plate, whose
+        edges are not free: a plate's twisting stiffness per width is G t^3 / 3).
         """
         xyz = _finite_array(xyz, "xyz", "m")
         if xyz.ndim != 2 or xyz.shape[1] != 3:
@@ -232,7 +237,10 @@ class Structure3D:
         start_edge = self.n_edges
         nodes = np.arange(start_node, start_node + n, dtype=np.int64)
         edges = np.arange(start_edge, start_edge + n - 1, dtype=np.int64)
-        rod = Rod3D(nodes=nodes, edges=edges, width=width, thickness=thickness, E=E, nu=nu)
+        J = None
+        if torsion_constant is not None:
+            J = _per_edge(torsion_constant, n - 1, "torsion_constant", "m^4")
+        rod = Rod3D(nodes=nodes, edges=edges, width=width, thickness=thickness, E=E, nu=nu, J=J)
 
         kbar = tw = None
         if natural_curvature is not None or natural_twist is not None:

@@ -37,6 +37,8 @@ class RodSpec:
     thickness: float
     normal: tuple
     nodes: np.ndarray  # global node indices
+    E_factor: float = 1.0  # Young's modulus of this rod / the mesh's E
+    plate: bool = False  # part of a continuous plate: torsion constant w t^3 / 3 per edge
 
 
 @dataclass
@@ -62,12 +64,18 @@ class Mesh3D:
         """(n_nodes, 3) stress-free positions, m."""
         return np.concatenate([r.xyz for r in self.rods], axis=0)
 
-    def add_rod(self, name, xyz, width, thickness, normal=(0.0, 0.0, 1.0)) -> np.ndarray:
+    def add_rod(self, name, xyz, width, thickness, normal=(0.0, 0.0, 1.0), *,
+                E_factor=1.0, plate=False) -> np.ndarray:
+        """Add a rod; ``E_factor`` multiplies the mesh's Young's modulus for it (a stiffened
+        part), ``plate``: the strip is cut out of a continuous plate (its torsion constant is
+        the plate's w t^3 / 3: its edges are not free, whatever its width). Returns its
+        global node indices."""
         xyz = np.ascontiguousarray(xyz, dtype=float)
         width = np.broadcast_to(np.asarray(width, dtype=float), (len(xyz) - 1,)).copy()
         start = self.n_nodes
         nodes = np.arange(start, start + len(xyz), dtype=np.int64)
-        self.rods.append(RodSpec(name, xyz, width, float(thickness), tuple(normal), nodes))
+        self.rods.append(RodSpec(name, xyz, width, float(thickness), tuple(normal), nodes,
+                                 float(E_factor), bool(plate)))
         return nodes
 
     def _rod_index(self, node):
@@ -118,8 +126,10 @@ class Mesh3D:
 
         st = Structure3D()
         for r in self.rods:
-            rod = st.add_rod(r.xyz, width=r.width, thickness=r.thickness, E=self.E, nu=self.nu,
-                             normal=r.normal)
+            J = r.width * r.thickness**3 / 3.0 if r.plate else None
+            rod = st.add_rod(r.xyz, width=r.width, thickness=r.thickness,
+                             E=self.E * r.E_factor, nu=self.nu, normal=r.normal,
+                             torsion_constant=J)
             if not np.array_equal(np.asarray(rod.nodes), r.nodes):
                 raise RuntimeError("Structure3D numbered the nodes differently from the mesh")
         for a, b in self.joints:

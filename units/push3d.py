@@ -120,7 +120,7 @@ def _probe(st, node):
         return None
 
 
-def refine_peak(probe, d, F, Q, i, tol=2e-2):
+def refine_peak(probe, d, F, Q, i, tol=2e-3):
     """F_cr, d_cr: the force maximum near path sample i by displacement-controlled solves
     (a limit point under load control is regular under displacement control); the vertex of
     the parabola through three samples when that fails. ``tol``: the search stops when the
@@ -174,9 +174,11 @@ def _zero_state(st, path, Q, i, node, probe):
             from solver.states import zero_force_displacement
 
             tol_F = 1e-9 * max(abs(F[i - 1]), abs(F[i]))
-            _, p = zero_force_displacement(probe, d[i - 1], d[i], Q[i - 1], Q[i], F[i - 1],
-                                           F[i], tol_F)
-            pos, q = solve(p)
+            zero_force_displacement(probe, d[i - 1], d[i], Q[i - 1], Q[i], F[i - 1], F[i],
+                                    tol_F)
+            # the full state of the last solve (its twists: positions alone would restart
+            # every twist from the stress-free frames)
+            pos, q = solve(probe.last_state.copy())
             if inside(pos):
                 return pos, q, True
         except Exception:  # noqa: BLE001
@@ -225,9 +227,17 @@ def push_through(st, node, distance, steps=60, critical=False, method="mgdc") ->
     probe = _probe(st, node)
     i_pk, j, k = snap_crossings(d, F)
     if i_pk is not None:
-        out.F_cr, out.d_cr, _ = refine_peak(probe, d, F, Q, i_pk)
+        out.F_cr, out.d_cr, exact = refine_peak(probe, d, F, Q, i_pk)
         out.states["i"] = np.asarray(path.positions[i_pk]).copy()
         out.full_states["i"] = Q[i_pk].copy()
+        if exact:  # state (i) at the maximum itself, whatever the path's sampling
+            try:
+                near = i_pk - 1 + int(np.argmin(np.abs(d[i_pk - 1: i_pk + 2] - out.d_cr)))
+                pos, _, _ = probe.solve(Q[near], out.d_cr)
+                out.states["i"] = np.asarray(pos).copy()
+                out.full_states["i"] = probe.last_state.copy()
+            except Exception:  # noqa: BLE001 - the path sample stands for it
+                pass
     if k is None:
         status = str(path.status)
         if status != "ok" and not (j is None and status.startswith("stopped")):

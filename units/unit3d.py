@@ -14,7 +14,7 @@ Geometry (x along the base, y across it, z up; `../shared/unit-model.md`, docs/u
   at every end-region node before x0 (each as wide, in x, as the length of plate it stands
   for; each two rods running out from the centre), rigidly jointed where they cross
   (`Mesh3D.bond`), and two crossed pairs of braces for the plate's in-plane shear stiffness.
-  The hollow middle is the two rails only. ``end_plate="stiff"``: bars 10x thicker.
+  The hollow middle is the two rails only. ``end_plate="stiff"``: bars of 1e4 x E (rigid across the width).
 - the arch, a strip of width w on the centre line, flat on the end regions and bonded there
   (shared positions; orientations jointed where both neighbouring edges are bonded),
   sinusoidal through the hole.
@@ -60,6 +60,11 @@ __all__ = ["Unit3DModel", "Unit3DResult", "build_unit_mesh_3d", "build_unit_3d",
 #: default resolution of the 3-D unit (nodes along a rail): F_cr within ~1.5 % of 81 nodes
 #: (docs/unit3d.md); 81 costs about 3x the time
 DEFAULT_NODES_3D = 41
+
+#: Young's modulus of the end plates' cross bars / E with end_plate="stiff": rigid next to
+#: the sheet (1e3 is not yet rigid: theta moves 0.07 deg more at 161 nodes), and not so far
+#: beyond that the solver's force tolerance, set by the stiffest rod, loosens for nothing
+STIFF_PLATE_FACTOR = 1e4
 NAN = float("nan")
 
 
@@ -136,7 +141,7 @@ def build_unit_mesh_3d(
     at every bonded node, orientations coupled next to the bond's two ends);
     ``brace_width``: width (m) of the in-plane braces of each end plate (default b + w, the
     plate's length: the end plate is then in-plane rigid next to the rest); ``end_plate``:
-    "elastic" (the sheet's own stiffness) or "stiff" (cross bars 10x thicker: the end
+    "elastic" (the sheet's own stiffness) or "stiff" (cross bars of 1e4 x E: the end
     plates keep their shape across the width, as the planar model assumes).
     Returns a `Unit3DModel` whose ``structure`` is None.
     """
@@ -158,9 +163,13 @@ def build_unit_mesh_3d(
     L, w, t, x0 = g.L, g.w, g.t, g.flat_length
     if end_plate not in ("elastic", "stiff"):
         raise ValueError(f"end_plate must be 'elastic' or 'stiff'; got {end_plate!r}")
-    # "stiff": cross bars 10x thicker (1000x stiffer in bending and twist): the end plates
-    # keep their shape across the width, as the planar model assumes (a diagnostic)
-    t_bar = g.t * (10.0 if end_plate == "stiff" else 1.0)
+    # The cross bars are strips of a continuous plate: their twisting stiffness is the
+    # plate's (J = w t^3 / 3, no free-edge loss), which does not drift as the bars narrow
+    # with the mesh. "stiff": bars of STIFF_PLATE_FACTOR x E (same thickness), rigid next to
+    # the rest: the end plates keep their shape across the width, as the planar model
+    # assumes (a diagnostic). Thicker bars do not do it: a bar one edge wide and 10 t thick
+    # twists like a narrow strip, softer and softer as the mesh is refined (docs/unit3d.md).
+    bar_E = STIFF_PLATE_FACTOR if end_plate == "stiff" else 1.0
     brace_width = x0 if brace_width is None else _real("brace_width", brace_width, "m",
                                                       "width of the end plates' braces")
     if not brace_width > 0:
@@ -217,7 +226,8 @@ def build_unit_mesh_3d(
             halves = []
             for sign, tag in ((-1.0, "m"), (1.0, "p")):
                 pts = np.stack([np.full_like(y_half, x), sign * y_half, np.zeros_like(y_half)], 1)
-                halves.append(mesh.add_rod(f"bar_{side}_{k}_{tag}", pts, bar_w[k], t_bar))
+                halves.append(mesh.add_rod(f"bar_{side}_{k}_{tag}", pts, bar_w[k], t,
+                                           E_factor=bar_E, plate=True))
             minus, plus = halves
             mesh.bond(centre[k], minus[0])
             mesh.bond(centre[k], plus[0])
