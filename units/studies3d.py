@@ -4,6 +4,9 @@
     .venv/bin/python -m units.studies3d tilt     [nodes]       # F_cr knock-down vs tilt
     .venv/bin/python -m units.studies3d unit2d   [nodes,...]   # 2-D unit, mesh convergence
     .venv/bin/python -m units.studies3d map2d    [nodes]       # 2-D unit, bistability map
+    .venv/bin/python -m units.studies3d theta_residual [nodes,...] [all|decisive|table1]
+        # where the stiff-plate residual against the planar model comes from
+        # (units/diagnostics3d.py; docs/unit3d.md, "Agreement with the planar model")
 
 Each prints one line per run (SI converted to mm, N, degrees) as it goes.
 """
@@ -111,6 +114,57 @@ def map2d(nodes=41, h_over_L=(0.2, 0.25, 0.3, 0.35, 0.4), t_over_L=(0.004, 0.005
                   f"[{time.perf_counter() - t0:.1f} s] {rec.get('message', '')}", flush=True)
 
 
+#: the two specimens of the residual study (h, t, L in mm): Table 1's h = 20 and 40 mm, t = 0.5
+RESIDUAL_SPECIMENS = [(19.24, 0.50, 99.5), (40.68, 0.50, 99.4)]
+#: resolution of the planar reference: theta within 0.005 deg and F_cr within 0.02 % of
+#: its limit (101 / 201 / 401 / 641 nodes: theta 79.106 / 79.144 / 79.154 / 79.156 deg)
+PLANAR_REFERENCE_NODES = 641
+
+
+def theta_residual(nodes=(41, 81), which="all"):
+    """F_cr and theta of the 3-D unit's variants (`units.diagnostics3d.VARIANTS`) against the
+    converged planar model. ``which``: "all" (every variant at the two specimens),
+    "decisive" (`units.diagnostics3d.DECISIVE`: the mesh convergence), "table1" (the
+    shipped stiff plates and the rigid bars over the six Table 1 specimens)."""
+    from solver.unit import simulate_unit
+    from units.diagnostics3d import DECISIVE, VARIANTS, run_variant
+
+    if which not in ("all", "decisive", "table1"):
+        raise SystemExit(f"theta_residual: unknown set {which!r}: all, decisive or table1")
+    names = {"all": list(VARIANTS), "decisive": list(DECISIVE),
+             "table1": ["stiff (shipped: bars of 1e4 x E)",
+                        "elastic (shipped: bars' torsion G b t^3/3)"]}[which]
+    specimens = TABLE1 if which == "table1" else RESIDUAL_SPECIMENS
+    rows = []
+    for h, t, L in specimens:
+        g = _geometry(h, t, L)
+        p = simulate_unit(g, nodes=PLANAR_REFERENCE_NODES, critical=False,
+                          check_self_standing=False)
+        print(f"h={h} t={t} L={L} planar ({PLANAR_REFERENCE_NODES} nodes): F_cr "
+              f"{p.F_cr:.5f} N theta {p.theta_deg:.3f} deg S {p.S / MM:.3f} mm", flush=True)
+        for name in names:
+            for n in nodes:
+                if "rigid bar joints" in name and n > 161:
+                    # 1000x joint pairs on 1e5 x E bars: ill-conditioned, > 10 min at 321
+                    print(f"   {name:<40} n={n:<4} skipped (ill-conditioned above 161 nodes)")
+                    continue
+                r = run_variant(g, nodes=n, **VARIANTS[name])
+                dF = (r["F_cr"] / p.F_cr - 1) * 100
+                th = r.get("theta", float("nan"))
+                extra = ""
+                if "theta_centre" in r:
+                    extra = (f" | centre-strip theta {r['theta_centre'] - th:+.4f}, rail twist "
+                             f"{r['rail_twist']:.4f} deg")
+                print(f"   {name:<40} n={n:<4} {r['status'][:12]:<12} F_cr {r['F_cr']:.5f} N "
+                      f"({dF:+.2f} %) theta {th:.3f} deg ({th - p.theta_deg:+.3f})"
+                      f"{extra}  [{r['time']:.1f} s]", flush=True)
+                rows.append(dict(h=h, t=t, L=L, variant=name, nodes=n, F_cr=r["F_cr"],
+                                 theta=th, dF_pct=dF, dtheta=th - p.theta_deg,
+                                 F_cr_planar=p.F_cr, theta_planar=p.theta_deg,
+                                 status=r["status"], time=r["time"]))
+    return rows
+
+
 if __name__ == "__main__":  # pragma: no cover
     what = sys.argv[1] if len(sys.argv) > 1 else "table1"
     arg = [int(x) for x in sys.argv[2].split(",")] if len(sys.argv) > 2 else None
@@ -122,5 +176,9 @@ if __name__ == "__main__":  # pragma: no cover
         unit2d(**({"nodes": arg} if arg else {}))
     elif what == "map2d":
         map2d(**({"nodes": arg[0]} if arg else {}))
+    elif what == "theta_residual":
+        theta_residual(**({"nodes": arg} if arg else {}),
+                       **({"which": sys.argv[3]} if len(sys.argv) > 3 else {}))
     else:
-        raise SystemExit(f"unknown study {what!r}: table1, tilt, unit2d or map2d")
+        raise SystemExit(f"unknown study {what!r}: table1, tilt, unit2d, map2d or "
+                         f"theta_residual")
