@@ -314,9 +314,12 @@ class _Recorder:
     Forces and energies come in the driver system's units and are kept in N and J
     (``force_unit``: see `_driver_system`)."""
 
-    def __init__(self, structure, force_unit=1.0):
+    def __init__(self, structure, force_unit=1.0, system=None):
         self.structure = structure
         self.force_unit = float(force_unit)
+        # a system that carries reference frames (3-D rods) records the twists in the
+        # canonical convention, so that any other system can restart from a path's states
+        self._system_fields = getattr(system, "state_fields", None)
         self.rows = {k: [] for k in ("d", "F", "q", "E", "it", "neg", "negd")}
         self.fields = {}
 
@@ -326,7 +329,10 @@ class _Recorder:
         pos = np.array(st.positions_of(q), dtype=float, copy=True)
         for k, v in zip(self.rows, (d, F, pos, E, it, neg, negd)):
             self.rows[k].append(v)
-        for k, v in st.state_fields(q).items():
+        fields = dict(st.state_fields(q))
+        if self._system_fields is not None:
+            fields.update(self._system_fields(q))
+        for k, v in fields.items():
             self.fields.setdefault(k, []).append(np.array(v, dtype=float, copy=True))
 
     def path(self, status, method, info, critical_points=()):
@@ -491,7 +497,7 @@ def follow_displacement(
     q0 = structure.initial_state()
     held = control.member_dofs[:, axis]
     q = q0.copy()
-    rec = _Recorder(structure, fu)
+    rec = _Recorder(structure, fu, system)
     system.evaluate(q)
     system.factor()
     rec.add(0.0, 0.0, q, system.energy, 0, system.negative_eigenvalues, system.negative_eigenvalues)
@@ -695,7 +701,7 @@ def follow_mgdc(
 
     q = structure.initial_state()
     lam = 0.0
-    rec = _Recorder(structure, fu)
+    rec = _Recorder(structure, fu, system)
     system.evaluate(q)
     if not system.factor():
         raise ValueError(

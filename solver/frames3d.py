@@ -85,6 +85,26 @@ def transport_frames(t_source, d_source, t_new):
     return d
 
 
+def canonical_twist_offset(t0, d0, t, d_ref):
+    """(n,) rad: the angle about ``t`` from the reference directors ``d_ref`` (n, 3) to the
+    *canonical* ones, the stress-free directors ``d0`` carried from their tangents ``t0``
+    straight to ``t`` by one parallel transport. A twist theta about d_ref is the twist
+    theta - offset about the canonical directors: the same material frame, read in a
+    convention that depends on the configuration only, not on the path that led to it
+    (time-parallel frames pick up a holonomy along a path that turns in 3-D). Zero where an
+    edge has turned back on its stress-free direction (no canonical frame there)."""
+    c = np.einsum("ij,ij->i", t0, t)
+    w = np.cross(t0, t)
+    ok = 1.0 + c > 1e-8
+    f = np.where(ok, np.einsum("ij,ij->i", w, d0) / np.where(ok, 1.0 + c, 1.0), 0.0)
+    canon = c[:, None] * d0 + np.cross(w, d0) + f[:, None] * w
+    canon -= np.einsum("ij,ij->i", canon, t)[:, None] * t
+    canon /= np.linalg.norm(canon, axis=1)[:, None]
+    off = np.arctan2(np.einsum("ij,ij->i", np.cross(d_ref, canon), t),
+                     np.einsum("ij,ij->i", d_ref, canon))
+    return np.where(ok, off, 0.0)
+
+
 def reference_twist(tangents, directors, pairs):
     """Reference twist (rad) at each (edge_a, edge_b) pair: the signed angle about t_b from
     the space-parallel transport of d_a onto t_b to d_b."""

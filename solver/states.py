@@ -38,6 +38,8 @@ class DisplacementProbe:
         q = state_from(self.structure, guess, "guess")
         held = c.member_dofs[:, c.axis]
         q[held] = self.q0[held] + c.direction[c.axis] * d
+        if hasattr(self.system, "reset_frames"):  # 3-D rods: read q's twists as canonical
+            self.system.reset_frames()
         it = _newton(self.system, q, 0.0, None, self.tol * self.fscale, TOL_DISP * self.length,
                      self.max_iter, 0.25 * self.length)
         if it < 0:

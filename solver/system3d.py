@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from solver.assembly3d import apply_scaled_increment, assemble_system3d_ws, element_dofs3d
-from solver.frames3d import reference_twist, transport_frames
+from solver.frames3d import canonical_twist_offset, reference_twist, transport_frames
 from solver.iteration3d import mgdc_iteration3d, newton_iteration3d
 from solver.system import PIVOT_TOL, ReducedSystem
 
@@ -32,6 +32,7 @@ class RodSystem3D(ReducedSystem):
         self.edge_nodes = model["edge_nodes"]
         self.src_t = np.array(model["src_t"], dtype=float, copy=True)
         self.src_d = np.array(model["src_d"], dtype=float, copy=True)
+        self._stress_free = (self.src_t.copy(), self.src_d.copy())
         self.stretch_params = model["stretch_params"]
         self.pair_edges = model["pair_edges"]
         self.pair_signs = model["pair_signs"]
@@ -123,6 +124,31 @@ class RodSystem3D(ReducedSystem):
                                                       self.src_d[: self.n_edges], t_new)
         self.src_t[: self.n_edges] = t_new
         self._reference_twist = None
+
+    def reset_frames(self):
+        """Back to the stress-free reference frames (as a fresh system): a state handed in
+        from outside (its twists canonical, see `state_fields`) then means what it says."""
+        t0, d0 = self._stress_free
+        self.src_t[:] = t0
+        self.src_d[:] = d0
+        self._reference_twist = None
+
+    def state_fields(self, q):
+        """{"twist": (n_edges,) rad}: the twists of the state ``q`` in the canonical
+        convention (`solver.frames3d.canonical_twist_offset`), which any fresh system (or one
+        after `reset_frames`) reads as the same material frames. Recorded on paths, so that a
+        path's states can be restarted from by another system."""
+        n3 = 3 * self.n_nodes
+        ne = self.n_edges
+        X = np.asarray(q[:n3]).reshape(-1, 3)
+        en = self.edge_nodes[:ne]
+        e = X[en[:, 1]] - X[en[:, 0]]
+        t = e / np.linalg.norm(e, axis=1)[:, None]
+        d_ref = transport_frames(np.ascontiguousarray(self.src_t[:ne]),
+                                 np.ascontiguousarray(self.src_d[:ne]), t)
+        t0, d0 = self._stress_free
+        off = canonical_twist_offset(t0[:ne], d0[:ne], t, d_ref)
+        return {"twist": np.asarray(q[n3:n3 + ne]) - off}
 
     @property
     def reference_twist(self):

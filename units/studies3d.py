@@ -35,9 +35,10 @@ def table1(nodes=(41, 81), plates=("elastic", "stiff")):
     rows = []
     for h, t, L in TABLE1:
         g = _geometry(h, t, L)
-        p = simulate_unit(g)
-        print(f"h={h} t={t} L={L} planar: status {p.status} F_cr {p.F_cr:.4f} N theta "
-              f"{p.theta_deg:.2f} deg S {p.S / MM:.2f} mm", flush=True)
+        p = simulate_unit(g, nodes=PLANAR_REFERENCE_NODES)
+        print(f"h={h} t={t} L={L} planar ({PLANAR_REFERENCE_NODES} nodes): status {p.status} "
+              f"F_cr {p.F_cr:.4f} N theta {p.theta_deg:.2f} deg S {p.S / MM:.2f} mm, released "
+              f"theta {p.theta_released_deg:.2f} deg S {p.S_released / MM:.2f} mm", flush=True)
         for plate in plates:
             for n in nodes:
                 t0 = time.perf_counter()
@@ -48,7 +49,10 @@ def table1(nodes=(41, 81), plates=("elastic", "stiff")):
                 print(f"   3-D {plate:<7} n={n:<4} status {r.status:<10} F_cr {r.F_cr:.4f} N "
                       f"({rel:+.2f} %) theta {r.theta_deg:.2f} deg ({dth:+.2f}) S "
                       f"{r.S / MM:.2f} mm d_cr {r.d_cr / MM:.2f} d_ii {r.d_unstable / MM:.2f} "
-                      f"d_iii {r.d_second / MM:.2f} mm  [{dt:.1f} s]", flush=True)
+                      f"d_iii {r.d_second / MM:.2f} mm; released theta "
+                      f"{r.theta_released_deg:.2f} ({r.theta_released_deg - p.theta_released_deg:+.2f})"
+                      f" S {r.S_released / MM:.2f} mm, self-standing {r.self_standing}"
+                      f"  [{dt:.1f} s]", flush=True)
                 rows.append(dict(h=h, t=t, L=L, plate=plate, nodes=n, F_cr=r.F_cr,
                                  F_cr_planar=p.F_cr, theta=r.theta_deg,
                                  theta_planar=p.theta_deg, status=r.status,
