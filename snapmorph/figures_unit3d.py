@@ -78,6 +78,13 @@ def plot_unit3d_states(r, path, planar=None):
             b, a = planar.shapes[s]["base"] * 1e3, planar.shapes[s]["arch"] * 1e3
             ax.plot(b[:, 0], b[:, 1], "k:", lw=1.2, label="planar model" if s == "i" else None)
             ax.plot(a[:, 0], a[:, 1], "k:", lw=0.8)
+    rel = getattr(r, "released", {}) or {}
+    if "base_shape" in rel:  # the unit as used: actuator removed, standing on its ends
+        b = np.asarray(rel["base_shape"]) * 1e3
+        ax.plot(b[:, 0], b[:, 2], "--", color="C4", lw=1.4, label="3-D released (iii)")
+        if "arch" in rel:
+            a = np.asarray(rel["arch"]) * 1e3
+            ax.plot(a[:, 0], a[:, 2], "--", color="C4", lw=0.8)
     ax.set_aspect("equal")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("z (mm)")
@@ -119,6 +126,11 @@ def plot_unit3d_states(r, path, planar=None):
     row("d_iii (mm)", r.d_second, p.d_second if p else None, 1e3)
     row("S (mm)", r.S, p.S if p else None, 1e3)
     row("theta (deg)", r.theta_deg, p.theta_deg if p else None)
+    row("S rel (mm)", getattr(r, "S_released", np.nan),
+        getattr(p, "S_released", None) if p else None, 1e3)
+    row("th rel (deg)", getattr(r, "theta_released_deg", np.nan),
+        getattr(p, "theta_released_deg", None) if p else None)
+    lines.append("(rel: released, actuator removed)")
     ax.text(0.0, 1.0, "\n".join(lines), family="monospace", fontsize=9, va="top")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
