@@ -12,8 +12,27 @@ Model (x, y in the base plane, z up; SI units; docs/unit3d.md):
 - arches: "x" along y = L/2 from x = 0 to L, "y" along x = L/2; each flat over its first and
   last b + w/2 (across the frame strip and the extra flat length b), sinusoidal in between,
   apex h at the centre; each end rigidly jointed to the side's midpoint node (the glued
-  overlap of the two strips is w x w, which a rigid joint represents); the two apex nodes are
-  rigidly jointed (bonded where the arches cross);
+  overlap of the two strips is w x w); the two apex nodes are rigidly jointed (bonded where
+  the arches cross);
+- overlaps: where two strips meet at right angles (the frame's corners, the arch feet on the
+  sides, the arches' crossing) `Structure3D.joint` couples the edge of each rod next to the
+  node, and its stiffness is the series of those edges' half lengths, with bending and twist
+  of the two rods paired as if they were collinear. With edges of the mesh spacing there
+  (as before) that coupling is an extra compliance proportional to the spacing: the model
+  converged at first order only (an L-shaped cantilever of two jointed strips: -8.3, -4.4,
+  -2.3, -1.1, -0.58 % tip deflection at 5-80 edges per leg, a straight one at second
+  order), F_cr 1.271 / 1.250 / 1.240 / 1.234 N at 21 / 41 / 81 / 161 nodes per side, and
+  the released warped state, whose curl concentrates at the corners, not at all in practice
+  (curled pair 41.6 / 61.7 / 72.2 / 77.5 deg). Now each rod has one edge of fixed length
+  over each overlap, whatever the mesh: the first and last w/2 of a side (to the inner edge
+  of the crossing strip), the w/2 each side of its midpoint (under the arch foot), the arch
+  feet's first w/2 (on the strip), and at the apex the actuator's edges (``joint_length``:
+  the straddling edges are ``joint_length / 2`` long, the apex's own two edges half that).
+  ``overlaps="elastic"`` (default): those edges have the sheet's stiffness (the overlap is
+  lumped on one edge; at 41 nodes and w = L / 20, spacing = w/2, the mesh is the old one);
+  ``overlaps="rigid"``: a diagnostic in which the w x w overlaps are rigid (those edges, and
+  the crossing's w/2 each side of the apex, `RIGID_OVERLAP_THICKNESS` x thicker; the
+  actuator holds the crossing). Both converge at second order.
 - actuator: the nodes of both arches within ``joint_length`` of the apex move as one, the
   apex cannot move in x or y, and it is pushed down (-z);
 - supports: z held at the four side midpoints, under the arch feet (the analogue of the
@@ -37,7 +56,6 @@ from units.frame3d import (
     PETG_NU,
     Mesh3D,
     UnitGeometry,
-    arch_nodes_x,
     arch_profile,
     end_tangent_angle,
     segment_points,
@@ -49,6 +67,12 @@ __all__ = ["Unit2DModel", "Unit2DResult", "build_unit_mesh_2d", "build_unit_2d",
 
 #: default resolution: nodes along one side of the square
 DEFAULT_NODES_2D = 41
+#: how the w x w overlaps of strips meeting at right angles are modelled (module docstring)
+OVERLAPS = ("elastic", "rigid")
+#: thickness of the overlap edges / t with overlaps="rigid": 1000x the bending stiffness
+#: (5x instead moved the released theta by 0.16 deg and F_cr by 0.1 % at 81 nodes), not so
+#: stiff that the solver's force scale (set by the stiffest edge) loosens its tolerances more
+RIGID_OVERLAP_THICKNESS = 10.0
 SIDES = ("south", "east", "north", "west")
 NAN = float("nan")
 
@@ -63,6 +87,7 @@ class Unit2DModel:
     sides: dict  # side name -> node indices, corner to corner
     arches: dict  # "x", "y" -> node indices
     supports: np.ndarray
+    overlaps: str = "elastic"
 
 
 def _flat_2d(g):
@@ -79,13 +104,72 @@ def check_geometry_2d(g: UnitGeometry):
     if g.h > span:
         raise ValueError(f"h (arch apex height, m) must be <= the arch span L - 2 b - w = "
                          f"{span:.6g} m; got {g.h:.6g} m")
+    if not float(getattr(g, "joint_length", JOINT_LENGTH_DEFAULT)) > 0:
+        raise ValueError("joint_length (length of arch held by the actuator, m) must be > 0 "
+                         "for a 2-D unit (the arches cross at the apex, which must be a node "
+                         "between the actuator's edges); got 0")
+
+
+def _side_abscissae(L, w, spacing):
+    """Abscissae (m) of a side's nodes from corner to corner and the index of its midpoint:
+    one edge over each overlap ([0, w/2] at the corners, [L/2 - w/2, L/2 + w/2] under the
+    arch foot), edges no longer than ``spacing`` in between."""
+    inner = segment_points(np.array([0.5 * w, 0.5 * (L - w)]), spacing)
+    half = np.concatenate([[0.0], inner, [0.5 * L]])
+    return np.concatenate([half, L - half[::-1][1:]]), len(half) - 1
+
+
+def _arch_raised(x0, span, h, spacing, joint_length, w, overlaps):
+    """Abscissae of the arch nodes on its raised part [x0, x0 + span], near-uniform in arc
+    length (edges no longer than ``spacing``) except at the apex, where the nodes do not
+    depend on the mesh: "elastic", the actuator's rigid joint of arc length ``joint_length``
+    centred on the apex with one edge straddling each end of it (as `arch_nodes_x` with the
+    straddle at its coarse-mesh length joint_length / 2); "rigid", the crossing's w/2 each
+    side of the apex (and the ends of a longer joint). Returns (x, index of the apex node,
+    (start, stop) slice of the nodes the actuator moves as one, [first, stop) of the edges
+    of the crossing made rigid (empty for "elastic"))."""
+    xs = np.linspace(x0, x0 + span, 8001)
+    z = arch_profile(xs, x0, span, h)
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(xs), np.diff(z)))])
+    total = s[-1]
+    s_act = float(np.interp(x0 + 0.5 * span, xs, s))
+    half = 0.5 * joint_length
+    if overlaps == "elastic":
+        room = min(s_act - half, total - s_act - half)
+        straddle = min(half, room)
+        core = [-half - 0.5 * straddle, -half + 0.5 * straddle, 0.0, half - 0.5 * straddle,
+                half + 0.5 * straddle]
+        c = 0.0
+    else:
+        c = 0.5 * w
+        reach = max(c, half)
+        room = min(s_act, total - s_act) - reach
+        core = sorted({-reach, -c, 0.0, c, reach})
+    if not room > 0:
+        raise ValueError(f"the actuator joint (joint_length {joint_length:.6g} m) or the "
+                         f"crossing (w {w:.6g} m) does not fit on the arch")
+    left = segment_points(np.array([0.0, s_act + core[0]]), spacing)
+    right = segment_points(np.array([s_act + core[-1], total]), spacing)
+    targets = np.concatenate([left, s_act + np.array(core[1:-1]), right])
+    x = np.interp(targets, s, xs)
+    x[0], x[-1] = x0, x0 + span
+    lo = len(left) - 1
+    apex = lo + core.index(0.0)
+    stiff = (lo + core.index(-c), lo + core.index(c)) if c > 0 else (apex, apex)
+    return x, apex, (lo, lo + len(core)), stiff
 
 
 def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float = PETG_NU,
-                       actuator: bool = True, supports: bool = True) -> Unit2DModel:
-    """Mesh the 2-D unit (no solver needed). ``nodes``: nodes along one side (odd is not
-    required: each side always has a node at its midpoint)."""
+                       actuator: bool = True, supports: bool = True,
+                       overlaps: str = "elastic") -> Unit2DModel:
+    """Mesh the 2-D unit (no solver needed). ``nodes``: resolution, the spacing is
+    L / (nodes - 1) (a side has that many nodes when w/2 is a multiple of the spacing, as at
+    41 with w = L / 20; each side always has a node at its midpoint). ``overlaps``: "elastic"
+    or "rigid" (module docstring)."""
     check_geometry_2d(g)
+    if overlaps not in OVERLAPS:
+        raise ValueError(f"overlaps (model of the w x w overlaps) must be one of {OVERLAPS}; "
+                         f"got {overlaps!r}")
     if (isinstance(nodes, bool) or not isinstance(nodes, (int, np.integer))
             or not 11 <= nodes <= 1001):
         raise ValueError(f"nodes (resolution: nodes along a side) must be an integer in "
@@ -100,9 +184,7 @@ def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float
         raise ValueError(f"nu (Poisson's ratio) must be in (-1, 0.5]; got {nu!r}")
     L, w, t = g.L, g.w, g.t
     spacing = L / (int(nodes) - 1)
-    half = segment_points(np.array([0.0, 0.5 * L]), spacing)
-    s = np.concatenate([half, L - half[::-1][1:]])  # symmetric, midpoint a node
-    mid = len(half) - 1
+    s, mid = _side_abscissae(L, w, spacing)  # symmetric, midpoint a node
     z = np.zeros_like(s)
     mesh = Mesh3D(E=g.E, nu=nu)
     sides = {
@@ -111,6 +193,12 @@ def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float
         "north": mesh.add_rod("north", np.stack([L - s, z + L, z], 1), w, t),
         "west": mesh.add_rod("west", np.stack([z, L - s, z], 1), w, t),
     }
+    rigid = overlaps == "rigid"
+    if rigid:  # the overlap edges (per-edge thickness, which Structure3D.add_rod takes)
+        side_t = np.full(len(s) - 1, t)
+        side_t[[0, mid - 1, mid, len(s) - 2]] = RIGID_OVERLAP_THICKNESS * t
+        for rod in mesh.rods:
+            rod.thickness = side_t
     order = list(SIDES)
     for a, b in zip(order, order[1:] + order[:1]):  # corners
         mesh.bond(sides[a][-1], sides[b][0])
@@ -123,7 +211,7 @@ def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float
     # (meshing it finer left its inner nodes unbonded: F_cr fell 1.7 % per doubling)
     flat = np.concatenate([[0.0], segment_points(np.array([0.5 * w, x0]), spacing)]) \
         if x0 > 0.5 * w * (1 + 1e-12) else np.array([0.0, x0])
-    raised, act, (lo, hi) = arch_nodes_x(x0, L - x0, x0, span, g.h, spacing, 0.5 * L, jl)
+    raised, act, (lo, hi), stiff = _arch_raised(x0, span, g.h, spacing, jl, w, overlaps)
     u = np.concatenate([flat[:-1], raised, L - flat[:-1][::-1]])
     zz = arch_profile(u, x0, span, g.h)
     c = np.full_like(u, 0.5 * L)
@@ -131,6 +219,12 @@ def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float
         "x": mesh.add_rod("arch_x", np.stack([u, c, zz], 1), w, t),
         "y": mesh.add_rod("arch_y", np.stack([c, u, zz], 1), w, t),
     }
+    if rigid:  # the feet's first w/2 on the strip, and the crossing
+        arch_t = np.full(len(u) - 1, t)
+        arch_t[[0, len(u) - 2]] = RIGID_OVERLAP_THICKNESS * t
+        arch_t[len(flat) - 1 + stiff[0]: len(flat) - 1 + stiff[1]] = RIGID_OVERLAP_THICKNESS * t
+        for rod in mesh.rods[-2:]:
+            rod.thickness = arch_t
     k_apex = len(flat) - 1 + act
     apex_x, apex_y = int(arches["x"][k_apex]), int(arches["y"][k_apex])
     mesh.bond(apex_x, apex_y)
@@ -153,7 +247,7 @@ def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float
     mesh.named.update(push=apex_x, apex_y=apex_y)
     mesh.groups.update({f"side_{k}": v for k, v in sides.items()})
     mesh.groups.update(arch_x=arches["x"], arch_y=arches["y"], supports=support)
-    return Unit2DModel(mesh, None, apex_x, sides, arches, support)
+    return Unit2DModel(mesh, None, apex_x, sides, arches, support, overlaps)
 
 
 def build_unit_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, **options) -> Unit2DModel:
@@ -308,7 +402,8 @@ def released_state_2d(g, model: Unit2DModel, q_iii, nodes, nu):
     warp by more than that while the arches stay inverted). Returns (self_standing,
     released dict or None, negative eigenvalues or None, why not self-standing ("" when it
     is))."""
-    free = build_unit_mesh_2d(g, nodes=nodes, nu=nu, actuator=False, supports=False)
+    free = build_unit_mesh_2d(g, nodes=nodes, nu=nu, actuator=False, supports=False,
+                              overlaps=model.overlaps)
     st = free.mesh.to_structure()  # same rods, same node numbers (the actuator adds no rod)
     for node, comps in released_supports_2d(free):
         st.fix(node, comps)
@@ -333,10 +428,12 @@ def released_state_2d(g, model: Unit2DModel, q_iii, nodes, nu):
 
 def simulate_unit_2d(g: UnitGeometry, nodes: int | None = None, nu: float = PETG_NU,
                      steps: int = 60, critical: bool = False,
-                     check_self_standing: bool = True) -> Unit2DResult:
+                     check_self_standing: bool = True,
+                     overlaps: str = "elastic") -> Unit2DResult:
     """Push the 2-D unit's apex down until it snaps; F_cr, the d's and each side's S, theta
     and curvature in the second stable state, and (``check_self_standing``) in the released
-    state (iii) (actuator and supports removed; see `Unit2DResult`). Arguments are validated
+    state (iii) (actuator and supports removed; see `Unit2DResult`). ``overlaps``: "elastic"
+    (default) or "rigid" w x w overlaps (module docstring). Arguments are validated
     (ValueError naming the parameter); failures of the solve come back in ``status``."""
     nodes = DEFAULT_NODES_2D if nodes is None else nodes
     if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) \
@@ -347,7 +444,7 @@ def simulate_unit_2d(g: UnitGeometry, nodes: int | None = None, nu: float = PETG
         if not isinstance(flag, (bool, np.bool_)):
             raise ValueError(f"{name} must be True or False; got {flag!r}")
     t0 = time.perf_counter()
-    model = build_unit_2d(g, nodes=nodes, nu=nu)
+    model = build_unit_2d(g, nodes=nodes, nu=nu, overlaps=overlaps)
     out = push_through(model.structure, model.push_node, 3.0 * g.h, steps=int(steps),
                        critical=bool(critical))
     r = Unit2DResult(g, out.status, bistable=out.bistable, F_cr=out.F_cr, d_cr=out.d_cr,
