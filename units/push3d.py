@@ -138,6 +138,67 @@ def refine_peak(probe, d, F, Q, i, tol=2e-3):
     return (*parabola_peak(d, F, i), False)
 
 
+#: a sampled local minimum of F after the peak below this fraction of F_cr (and above 0)
+#: is refined: the path's steps may stride over a shallow dip below zero (a marginally
+#: bistable unit) that decides whether there is a state (iii)
+DIP_FRACTION = 0.2
+
+
+class _Samples:
+    """The path's samples (d, F, positions), with refined states inserted."""
+
+    def __init__(self, displacement, force, positions):
+        self.displacement, self.force, self.positions = displacement, force, positions
+
+
+def refine_dips(probe, d, F, P, Q, i_pk, tol=2e-3):
+    """Samples with the minimum of every shallow dip of F (a local minimum after the peak
+    with 0 < F < DIP_FRACTION F_cr between two path samples) inserted, located by Brent's
+    search on displacement-controlled solves from the nearest sample; returns (d, F, P, Q)
+    (the inputs when nothing was inserted). Only a dip the search takes below zero is
+    inserted: it makes the zero crossings of a marginally bistable unit visible."""
+    if probe is None or i_pk is None or len(F) < 3:
+        return d, F, P, Q
+    F_cr = F[i_pk]
+    inserts = []
+    for m in range(i_pk + 1, len(F) - 1):
+        if not (0.0 < F[m] < DIP_FRACTION * F_cr and F[m] <= F[m - 1] and F[m] < F[m + 1]):
+            continue
+        if not d[m - 1] < d[m] < d[m + 1]:
+            continue
+        cache = {}
+
+        def f(x, m=m, cache=cache):
+            x = float(x)
+            if x not in cache:
+                near = m - 1 + int(np.argmin(np.abs(d[m - 1:m + 2] - x)))
+                pos, Fx, _ = probe.solve(Q[near], x)
+                cache[x] = (Fx, np.asarray(pos).copy(), probe.last_state.copy())
+            return cache[x][0]
+
+        try:
+            import scipy.optimize
+
+            res = scipy.optimize.minimize_scalar(
+                f, bounds=(float(d[m - 1]), float(d[m + 1])), method="bounded",
+                options={"xatol": 0.5 * tol * (d[m + 1] - d[m - 1]), "maxiter": 60})
+            x = float(res.x)
+            Fx, pos, q = cache[x] if x in cache else (f(x), *cache[x][1:])
+        except Exception:  # noqa: BLE001 - the samples stand
+            continue
+        if Fx < 0.0:
+            inserts.append((m + 1 if x > d[m] else m, x, Fx, pos, q))
+    if not inserts:
+        return d, F, P, Q
+    d, F, P, Q = list(d), list(F), list(P), list(Q)
+    for at, x, Fx, pos, q in sorted(inserts, key=lambda t: -t[0]):
+        d.insert(at, x)
+        F.insert(at, Fx)
+        P.insert(at, pos)
+        Q.insert(at, q)
+    return np.asarray(d), np.asarray(F), np.asarray(P), np.asarray(Q)
+
+
 def _zero_state(st, path, Q, i, node, probe):
     """The equilibrium at F = 0 between path samples i-1 and i (which bracket a zero of F):
     Newton under no load from the interpolated state; if it leaves the bracket, regula falsi
@@ -226,6 +287,14 @@ def push_through(st, node, distance, steps=60, critical=False, method="mgdc") ->
     Q = path_states(st, path)
     probe = _probe(st, node)
     i_pk, j, k = snap_crossings(d, F)
+    samples = path
+    if k is None:  # a shallow dip the steps strode over may still go below zero
+        d2, F2, P2, Q2 = refine_dips(probe, d, F, np.asarray(path.positions), Q, i_pk)
+        if len(d2) > len(d):
+            d, F, Q = d2, F2, Q2
+            samples = _Samples(d2, F2, P2)
+            out.curve = (d.copy(), F.copy())
+            i_pk, j, k = snap_crossings(d, F)
     if i_pk is not None:
         out.F_cr, out.d_cr, exact = refine_peak(probe, d, F, Q, i_pk)
         out.states["i"] = np.asarray(path.positions[i_pk]).copy()
@@ -249,8 +318,8 @@ def push_through(st, node, distance, steps=60, critical=False, method="mgdc") ->
                           "F crosses zero downwards but does not rise through zero again "
                           f"before d = {d[-1]:.4g} m")
         return out
-    pos_ii, q_ii, ok_ii = _zero_state(st, path, Q, j, node, probe)
-    pos_iii, q_iii, ok_iii = _zero_state(st, path, Q, k, node, probe)
+    pos_ii, q_ii, ok_ii = _zero_state(st, samples, Q, j, node, probe)
+    pos_iii, q_iii, ok_iii = _zero_state(st, samples, Q, k, node, probe)
     out.exact_states = ok_ii and ok_iii
     X = np.asarray(path.positions[0])
     out.d_unstable = float(X[node, 2] - pos_ii[node, 2])

@@ -392,3 +392,19 @@ def test_2d_unit_mesh_convergence_within_one_percent():
     assert coarse.F_cr == pytest.approx(fine.F_cr, rel=0.01)
     assert coarse.theta_deg == pytest.approx(fine.theta_deg, rel=0.01)
     assert coarse.d_second == pytest.approx(fine.d_second, rel=0.01)
+
+
+def test_a_shallow_dip_strided_over_by_the_steps_is_refined():
+    """h/L = 0.4, t/L = 0.0075 is marginally bistable: F dips to about -0.02 N between
+    samples that are both above zero (0.066 and 0.051 N at d = 56.2 and 63.6 mm with the
+    units' step size). Refining the sampled minimum by displacement-controlled solves finds
+    the dip, hence states (ii) and (iii) 4 mm apart; without it the unit read monostable."""
+    from units.unit2d import simulate_unit_2d
+
+    g = UnitGeometry(L=0.1, h=0.04, t=0.75e-3, w=5e-3)
+    r = simulate_unit_2d(g, check_self_standing=False)
+    assert r.status == "ok" and r.bistable
+    d, F = r.curve
+    assert F.min() < 0.0
+    assert -0.1 < F.min() / r.F_cr < 0.0  # shallow
+    assert 0.0 < r.d_second - r.d_unstable < 0.01
