@@ -549,3 +549,19 @@ def level(positions, nodes, reference):
         R = np.eye(3)
     target = np.asarray(reference, dtype=float)[np.asarray(nodes)].mean(axis=0)
     return (P - c) @ R.T + target
+
+
+def record_release(result, release):
+    """Put the outcome of ``release()`` -> (self_standing, released dict or None, negative
+    eigenvalues, reason) on a unit result (``self_standing``, ``released``,
+    ``stability["released"]``, ``stability["released_reason"]``); a release that raises is
+    recorded as not self-standing with the exception as the reason, never raised."""
+    try:
+        ok, rel, neg, why = release()
+    except Exception as exc:  # noqa: BLE001 - a failed release is reported, not raised
+        ok, rel, neg, why = False, None, None, f"{type(exc).__name__}: {exc}"
+    result.self_standing = ok
+    result.released = rel or {}
+    result.stability["released"] = neg
+    if why:
+        result.stability["released_reason"] = why

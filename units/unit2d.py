@@ -60,7 +60,8 @@ from units.frame3d import (
     end_tangent_angle,
     segment_points,
 )
-from units.push3d import level, push_through, relax_released, transfer_state
+from units.planar import ReleasedMetrics
+from units.push3d import level, push_through, record_release, relax_released, transfer_state
 
 __all__ = ["Unit2DModel", "Unit2DResult", "build_unit_mesh_2d", "build_unit_2d",
            "simulate_unit_2d", "edge_metrics", "DEFAULT_NODES_2D", "SIDES"]
@@ -273,7 +274,7 @@ def edge_metrics(points) -> dict:
 
 
 @dataclass
-class Unit2DResult:
+class Unit2DResult(ReleasedMetrics):
     """Metrics of the 2-D unit (SI; NaN where absent): F_cr, d_cr, d_unstable, d_second,
     bistable as the planar unit; ``edges[state][side]`` = `edge_metrics` of each side;
     ``shapes[state]`` = {side or "arch_x"/"arch_y": (n, 3) positions}.
@@ -315,16 +316,6 @@ class Unit2DResult:
     released: dict = field(default_factory=dict)
     reason: str = ""
     stability: dict = field(default_factory=dict)
-
-    @property
-    def S_released(self) -> float:
-        """Mean over the four sides of the chord in the released state (iii), m."""
-        return float(self.released.get("S", NAN))
-
-    @property
-    def theta_released_deg(self) -> float:
-        """Mean over the four sides of theta in the released state (iii), degrees."""
-        return float(self.released.get("theta_deg", NAN))
 
     @property
     def curvature_released(self) -> float:
@@ -460,15 +451,7 @@ def simulate_unit_2d(g: UnitGeometry, nodes: int | None = None, nu: float = PETG
             continue  # as the planar unit: the shape, but no S or theta of an unstable (iii)
         r.edges[state] = {side: edge_metrics(pos[n]) for side, n in model.sides.items()}
     if r.bistable and check_self_standing:
-        try:
-            ok, rel, neg, why = released_state_2d(g, model, out.full_states["iii"], nodes, nu)
-        except Exception as exc:  # noqa: BLE001 - a failed release is reported, not raised
-            ok, rel, neg, why = False, None, None, f"{type(exc).__name__}: {exc}"
-        r.self_standing = ok
-        r.released = rel or {}
-        r.stability["released"] = neg
-        if why:
-            r.stability["released_reason"] = why
+        record_release(r, lambda: released_state_2d(g, model, out.full_states["iii"], nodes, nu))
     r.solve_time = time.perf_counter() - t0
     r.n_nodes = model.mesh.n_nodes
     return r

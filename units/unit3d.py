@@ -52,7 +52,8 @@ from units.frame3d import (
     segment_points,
 )
 from units.planar import ReleasedMetrics
-from units.push3d import PushOutcome, level, push_through, relax_released, transfer_state
+from units.push3d import (PushOutcome, level, push_through, record_release, relax_released,
+                          transfer_state)
 
 __all__ = ["Unit3DModel", "Unit3DResult", "build_unit_mesh_3d", "build_unit_3d",
            "simulate_unit_3d", "DEFAULT_NODES_3D"]
@@ -561,15 +562,7 @@ def simulate_unit_3d(
         if state == "iii" and r.bistable:
             r.S, r.theta_deg, r.base_shape = m["S"], m["theta_deg"], m["base"].copy()
     if r.bistable and check_self_standing:
-        try:
-            ok, rel, neg, why = released_state_3d(g, model, out.full_states["iii"], options)
-        except Exception as exc:  # noqa: BLE001 - a failed release is reported, not raised
-            ok, rel, neg, why = False, None, None, f"{type(exc).__name__}: {exc}"
-        r.self_standing = ok
-        r.released = rel or {}
-        r.stability["released"] = neg
-        if why:
-            r.stability["released_reason"] = why
+        record_release(r, lambda: released_state_3d(g, model, out.full_states["iii"], options))
     r.solve_time = time.perf_counter() - t0
     r.n_nodes = model.mesh.n_nodes
     return r
