@@ -20,6 +20,14 @@ CAPTIONS = {
     "arrays_three_units": "The paper's three units, every state: whole-array simulation against "
                           "forward kinematics (dev = largest distance, % of the array length).",
     "arrays_M": "The paper's Table 3 M array, every state: simulation against forward kinematics.",
+    "unit3d_states": "The unit in 3-D (frame base, elastic end plates; h = 20 mm): states (i)-(iii) "
+                     "in perspective, the side view with the planar model (dotted) and the released "
+                     "state (dashed), both force-displacement curves.",
+    "unit3d_knockdown": "F_cr of the 3-D unit against the tilt of its arch, relative to the "
+                        "untilted unit, at h = 20 and 40 mm.",
+    "unit2d_states": "The paper's 2-D unit (square frame, crossing arches; h = 40 mm): as made, "
+                     "second stable state actuated and released (one pair of sides curls, the "
+                     "frame warps), and the force-displacement curve.",
 }
 
 

@@ -4,8 +4,9 @@
   shapes and both force-displacement curves beside them;
 - `plot_knockdown`: F_cr / F_cr(no tilt) against the arch's tilt, one line per h;
 - `plot_unit2d_states`: the 2-D unit's two stable states in perspective and its curve;
-- `make(out)`: runs the simulations and writes the three figures (`python -m
-  snapmorph.figures_unit3d OUT`).
+- `study(out)`: runs the simulations and writes the three figures (`python -m
+  snapmorph.figures_unit3d OUT`); `make(out, args)` is the `snapmorph figures --only unit3d`
+  group.
 Lengths are drawn in millimetres.
 """
 
@@ -165,28 +166,34 @@ def plot_knockdown(rows, path, paper_note=True):
 
 
 def plot_unit2d_states(r, path):
-    """The 2-D unit's stress-free state and second stable state (iii) in perspective, and its
-    force-displacement curve (`units.unit2d.Unit2DResult`)."""
-    fig = plt.figure(figsize=(15, 4.8))
-    every = [np.concatenate(list(r.shapes[s]["rods"].values())) for s in r.shapes]
+    """The 2-D unit's stress-free state, second stable state (iii) actuated and released in
+    perspective, and its force-displacement curve (`units.unit2d.Unit2DResult`)."""
+    fig = plt.figure(figsize=(20, 4.8))
+    shapes, edges = dict(r.shapes), dict(r.edges)
+    rel = getattr(r, "released", {}) or {}
+    if "shapes" in rel:  # the unit as used: actuator and supports removed
+        shapes["released"], edges["released"] = rel["shapes"], rel.get("edges", {})
+    every = [np.concatenate(list(shapes[s]["rods"].values())) for s in shapes]
     panels = [("0", "0.3", "first stable state (as made)"),
-              ("iii", "C2", "second stable state (iii)")]
+              ("iii", "C2", "second stable state (iii), actuated"),
+              ("released", "C4", "second stable state, released")]
     for k, (s, color, title) in enumerate(panels):
-        ax = fig.add_subplot(1, 3, k + 1, projection="3d")
-        if s in r.shapes:
+        ax = fig.add_subplot(1, 4, k + 1, projection="3d")
+        if s in shapes:
             if s != "0":
-                _draw_rods(ax, r.shapes["0"]["rods"], "0.8", lw=0.7)
-            _draw_rods(ax, r.shapes[s]["rods"], color)
-            if s in r.edges and s != "0":
-                e = r.edges[s]
+                _draw_rods(ax, shapes["0"]["rods"], "0.8", lw=0.7)
+            _draw_rods(ax, shapes[s]["rods"], color)
+            if s in edges and s != "0":
+                e = edges[s]
                 title += "\n" + ", ".join(f"{n[0].upper()}: {e[n]['theta_deg']:.1f} deg"
                                           for n in ("south", "east", "north", "west"))
         else:
-            title += "\n(not reached: not bistable)"
+            title += ("\n(not reached: not bistable)" if not r.bistable
+                      else "\n(not computed)")
         ax.set_title(title, fontsize=9)
         _equal_3d(ax, every)
         ax.view_init(elev=25, azim=-55)
-    ax = fig.add_subplot(1, 3, 3)
+    ax = fig.add_subplot(1, 4, 4)
     d, F = r.curve
     ax.plot(np.asarray(d) * 1e3, F, "k-")
     ax.axhline(0, color="0.6", lw=0.8)
@@ -201,7 +208,17 @@ def plot_unit2d_states(r, path):
     return path
 
 
-def make(out, tilts=(0.0, 1.0, 2.0, 5.0), heights_mm=(20.0, 40.0), nodes=None):
+def make(out, args=None):
+    """The `snapmorph figures` group "unit3d": write unit3d_states.png, unit3d_knockdown.png
+    and unit2d_states.png into ``out``; returns their paths."""
+    import os
+
+    study(out)
+    return [os.path.join(out, f) for f in ("unit3d_states.png", "unit3d_knockdown.png",
+                                           "unit2d_states.png")]
+
+
+def study(out, tilts=(0.0, 1.0, 2.0, 5.0), heights_mm=(20.0, 40.0), nodes=None):
     """Run the simulations and write unit3d_states.png, unit3d_knockdown.png and
     unit2d_states.png into ``out``. Returns the rows of the knock-down study."""
     import os
@@ -231,5 +248,5 @@ def make(out, tilts=(0.0, 1.0, 2.0, 5.0), heights_mm=(20.0, 40.0), nodes=None):
 if __name__ == "__main__":  # pragma: no cover
     import sys
 
-    for row in make(sys.argv[1] if len(sys.argv) > 1 else "figures"):
+    for row in study(sys.argv[1] if len(sys.argv) > 1 else "figures"):
         print(row)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-FIGURES = ("specimens", "maps", "fk", "inverse", "arrays")
+FIGURES = ("specimens", "maps", "fk", "inverse", "arrays", "unit3d")
 
 
 def add_parser(sub):
