@@ -63,12 +63,22 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
         raise ConvergenceError("the path is not monotone in d around the maximum")
     tol_d = (b - a) * 1e-4 if tol_d is None else tol_d
     cache = {}
+    ds, Fs = np.asarray(d[i - 1:i + 2], dtype=float), np.asarray(F[i - 1:i + 2], dtype=float)
+    # F is smooth on the branch between the samples: a solve that lands further from the
+    # samples' line than twice their own variation has jumped to another equilibrium (its
+    # force can be 50 % off), and the search is abandoned (the caller falls back)
+    spread = float(np.max(np.abs(np.diff(Fs)))) + 1e-9 * float(np.max(np.abs(Fs)))
 
     def f(x):
         x = float(x)
         if x not in cache:
-            j = i - 1 + int(np.argmin(np.abs(np.asarray(d[i - 1:i + 2]) - x)))
-            cache[x] = probe.solve(positions[j], x)[1]
+            j = i - 1 + int(np.argmin(np.abs(ds - x)))
+            Fx = probe.solve(positions[j], x)[1]
+            if not abs(Fx - float(np.interp(x, ds, Fs))) <= 2.0 * spread:
+                raise ConvergenceError(
+                    f"the solve at d = {x:.6g} m left the path's branch (F = {Fx:.6g} N against "
+                    f"{float(np.interp(x, ds, Fs)):.6g} N on the path)")
+            cache[x] = Fx
         return cache[x]
 
     res = scipy.optimize.minimize_scalar(lambda x: -f(x), bounds=(a, b), method="bounded",

@@ -259,3 +259,34 @@ def test_unit_primary_and_bare_paths_agree_with_the_followed_one():
     bare = simulate_unit(g, check_self_standing=False, critical=False)
     assert primary.F_cr == follow.F_cr == bare.F_cr
     assert bare.bifurcation is None and "states" not in bare.stability
+
+
+class _ParabolaProbe:
+    """A stand-in for `DisplacementProbe`: F(d) = 1 - (d - 0.3)^2, except that solves in
+    ``jump`` land on another equilibrium with 50 % more force."""
+
+    def __init__(self, jump=None):
+        self.jump = jump
+
+    def solve(self, guess, d):
+        F = 1.0 - (d - 0.3) ** 2
+        if self.jump is not None and self.jump[0] <= d <= self.jump[1]:
+            F *= 1.5
+        return guess, F, 0
+
+
+def test_refine_maximum_finds_the_vertex_and_refuses_a_branch_jump():
+    """The default map once held F_cr 52 % above its neighbours: a displacement-controlled
+    solve of the search had converged on another equilibrium and its force was taken as
+    the maximum. A solve far off the samples' line now abandons the search (the callers fall
+    back to the samples' parabola)."""
+    from solver.continuation import ConvergenceError
+    from solver.states import refine_maximum
+
+    d = np.array([0.0, 0.2, 0.4, 0.6])
+    F = 1.0 - (d - 0.3) ** 2
+    pos = [None] * 4
+    F_max, d_max = refine_maximum(_ParabolaProbe(), d, F, pos, 1, tol_d=1e-6)
+    assert abs(d_max - 0.3) < 1e-5 and abs(F_max - 1.0) < 1e-9
+    with pytest.raises(ConvergenceError, match="left the path's branch"):
+        refine_maximum(_ParabolaProbe(jump=(0.25, 0.35)), d, F, pos, 1, tol_d=1e-6)
