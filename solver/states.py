@@ -13,6 +13,11 @@ import scipy.optimize
 from solver.continuation import TOL_DISP, ConvergenceError, _newton, make_control, state_from
 
 
+#: `DisplacementProbe.solve`: the numbers of equal steps in which the prescribed displacement
+#: is approached, tried in turn (1: Newton straight from the guess)
+SUBSTEPS = (1, 4, 16)
+
+
 class DisplacementProbe:
     """Equilibria of ``structure`` with ``node``'s displacement along an axis-aligned
     ``direction`` prescribed; every other constraint kept. Forces in N, lengths in m."""
@@ -35,13 +40,26 @@ class DisplacementProbe:
         Returns (positions (n_nodes, dim), force along the direction, negative eigenvalues
         with the displacement held). Raises ConvergenceError."""
         c = self.control
-        q = state_from(self.structure, guess, "guess")
+        start = state_from(self.structure, guess, "guess")
         held = c.member_dofs[:, c.axis]
-        q[held] = self.q0[held] + c.direction[c.axis] * d
+        sign = c.direction[c.axis]
+        d_start = float((start[held[0]] - self.q0[held[0]]) * sign)
         if hasattr(self.system, "reset_frames"):  # 3-D rods: read q's twists as canonical
             self.system.reset_frames()
-        it = _newton(self.system, q, 0.0, None, self.tol * self.fscale, TOL_DISP * self.length,
-                     self.max_iter, 0.25 * self.length)
+        # Newton straight to d first; if it fails, march the held displacement there from
+        # the guess's own in 4, then 16 steps: near a bifurcation of the held structure (at
+        # a force maximum, docs/path-following.md) K is nearly singular and a Newton started
+        # a whole path step away can take a wild first step
+        for n_sub in SUBSTEPS:
+            q = start.copy()
+            for k in range(1, n_sub + 1):
+                q[held] = self.q0[held] + sign * (d_start + (d - d_start) * k / n_sub)
+                it = _newton(self.system, q, 0.0, None, self.tol * self.fscale,
+                             TOL_DISP * self.length, self.max_iter, 0.25 * self.length)
+                if it < 0:
+                    break
+            if it >= 0:
+                break
         if it < 0:
             raise ConvergenceError(f"no equilibrium found at prescribed d = {d:.6g} m")
         self.system.accept(q)

@@ -290,3 +290,30 @@ def test_refine_maximum_finds_the_vertex_and_refuses_a_branch_jump():
     assert abs(d_max - 0.3) < 1e-5 and abs(F_max - 1.0) < 1e-9
     with pytest.raises(ConvergenceError, match="left the path's branch"):
         refine_maximum(_ParabolaProbe(jump=(0.25, 0.35)), d, F, pos, 1, tol_d=1e-6)
+
+
+def test_displacement_probe_marches_in_substeps_when_newton_fails():
+    """Near the force maximum of a shallow 3-D unit (h = 9.1 mm) the held structure is close
+    to a bifurcation, and a Newton started a whole path step away failed: the maximum fell
+    back to the samples' parabola, so F_cr depended on the path's sampling (0.48507 and
+    0.48540 N for two Newton tolerances of the push). Marching the held displacement in
+    substeps converges, and the search then gives one F_cr for both samplings."""
+    from solver.states import refine_maximum
+    from units.frame3d import UnitGeometry
+    from units.push3d import _probe, path_states, snap_crossings
+    from units.unit3d import build_unit_3d
+
+    g = UnitGeometry(L=0.1, h=0.0091, t=0.5e-3, w=5e-3, b=5e-3)
+    m = build_unit_3d(g)
+    st = m.structure
+    found = []
+    for tol in (1e-9, 1e-8):
+        p = st.push(m.push_node, (0.0, 0.0, -1.0), 3 * g.h, method="mgdc", target_iterations=6,
+                    tol=tol, stop=lambda rows: snap_crossings(rows["d"], rows["F"])[2] is not None)
+        d, F = np.asarray(p.displacement), np.asarray(p.force)
+        i = snap_crossings(d, F)[0]
+        probe = _probe(st, m.push_node)
+        F_max, _ = refine_maximum(probe, d, F, path_states(st, p), i,
+                                  tol_d=2e-3 * (d[i + 1] - d[i - 1]))
+        found.append(F_max)
+    assert abs(found[0] / found[1] - 1) < 1e-6, found
