@@ -70,7 +70,8 @@ class DisplacementProbe:
 def refine_maximum(probe, d, F, positions, i, tol_d=None):
     """Maximum of F(d) near path sample ``i`` (a local maximum of F): Brent's bounded search
     (golden section with parabolic steps, `scipy.optimize.minimize_scalar`) on d in
-    [d[i-1], d[i+1]] with displacement-controlled solves. Returns (F_max, d_max).
+    [d[i-1], d[i+1]] with displacement-controlled solves. Returns (F_max, d_max), and leaves
+the full state at d_max in ``probe.last_state``.
 
     Each solve starts from the nearest path sample, not from an earlier solve: with the
     node held, the force maximum is close to a bifurcation of the held structure (an
@@ -80,7 +81,7 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
     if not a < b:
         raise ConvergenceError("the path is not monotone in d around the maximum")
     tol_d = (b - a) * 1e-4 if tol_d is None else tol_d
-    cache = {}
+    cache, states = {}, {}
     ds, Fs = np.asarray(d[i - 1:i + 2], dtype=float), np.asarray(F[i - 1:i + 2], dtype=float)
     # F is smooth on the branch between the samples: a solve that lands further from the
     # samples' line than twice their own variation has jumped to another equilibrium (its
@@ -97,12 +98,15 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
                     f"the solve at d = {x:.6g} m left the path's branch (F = {Fx:.6g} N against "
                     f"{float(np.interp(x, ds, Fs)):.6g} N on the path)")
             cache[x] = Fx
+            states[x] = getattr(probe, "last_state", None)
         return cache[x]
 
     res = scipy.optimize.minimize_scalar(lambda x: -f(x), bounds=(a, b), method="bounded",
                                          options={"xatol": 0.5 * tol_d, "maxiter": 60})
     x = float(res.x)
-    return f(x), x
+    F_max = f(x)
+    probe.last_state = states[x]  # the state at the maximum, for the caller
+    return F_max, x
 
 
 def zero_force_displacement(probe, d0, d1, pos0, pos1, F0, F1, tol_F, max_steps=40):

@@ -299,14 +299,10 @@ def push_through(st, node, distance, steps=60, critical=False, method="mgdc") ->
         out.F_cr, out.d_cr, exact = refine_peak(probe, d, F, Q, i_pk)
         out.states["i"] = np.asarray(path.positions[i_pk]).copy()
         out.full_states["i"] = Q[i_pk].copy()
-        if exact:  # state (i) at the maximum itself, whatever the path's sampling
-            try:
-                near = i_pk - 1 + int(np.argmin(np.abs(d[i_pk - 1: i_pk + 2] - out.d_cr)))
-                pos, _, _ = probe.solve(Q[near], out.d_cr)
-                out.states["i"] = np.asarray(pos).copy()
-                out.full_states["i"] = probe.last_state.copy()
-            except Exception:  # noqa: BLE001 - the path sample stands for it
-                pass
+        if exact:  # state (i) at the maximum itself (solved by the search), whatever the
+            # path's sampling
+            out.full_states["i"] = probe.last_state.copy()
+            out.states["i"] = np.asarray(st.positions_of(out.full_states["i"])).copy()
     if k is None:
         status = str(path.status)
         if status != "ok" and not (j is None and status.startswith("stopped")):
