@@ -32,12 +32,19 @@ def _residual(grad, lam, P, R):
 
 
 @njit(cache=True)
-def _apply(q, dof_map, du):
+def max_abs(du):
+    """Largest |du[i]| (the size of a correction, as the drivers measure it)."""
     du_max = 0.0
     for i in range(du.shape[0]):
         a = abs(du[i])
         if a > du_max:
             du_max = a
+    return du_max
+
+
+@njit(cache=True)
+def _apply(q, dof_map, du):
+    du_max = max_abs(du)
     for j in range(q.shape[0]):
         r = dof_map[j]
         if r >= 0:

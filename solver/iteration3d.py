@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from solver.assembly3d import assemble_system3d_ws
-from solver.iteration import mgdc_correction, newton_correction
+from solver.assembly3d import apply_scaled_increment, assemble_system3d_ws
+from solver.iteration import max_abs, mgdc_correction, newton_correction
 
 
 @njit(cache=True)
@@ -28,16 +28,8 @@ def _assemble(q, model, dof_scale, band, grad, grad_full):
 
 @njit(cache=True)
 def _apply_scaled(q, dof_map, dof_scale, du):
-    du_max = 0.0
-    for i in range(du.shape[0]):
-        a = abs(du[i])
-        if a > du_max:
-            du_max = a
-    for j in range(q.shape[0]):
-        r = dof_map[j]
-        if r >= 0:
-            q[j] += dof_scale[j] * du[r]
-    return du_max
+    apply_scaled_increment(q, dof_map, dof_scale, du, 1.0)
+    return max_abs(du)
 
 
 @njit(cache=True)
