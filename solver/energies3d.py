@@ -18,8 +18,9 @@ Reference kernels: bending and twisting take the 18 frame components
 ``z = [t_a, m1_a, m2_a, t_b, m1_b, m2_b]`` as independent variables (gradient (18,), Hessian
 (18, 18)); `chain_pair` carries them to the edges' vectors and twist angles through
 `solver.frames3d.material_frame_jet`. The assembly uses `pair_terms_edges`, the same energy
-formed straight in the edge coordinates (no 18 x 18 matrix, no allocation; tested equal to
-the reference kernels to round-off and against finite differences).
+formed straight in the edge coordinates through the frames' angular velocities (no 18 x 18
+matrix, no allocation; tested equal to the reference kernels to round-off and against
+finite differences).
 """
 
 from __future__ import annotations
@@ -373,92 +374,130 @@ def chain_pair_ws(gz, hz, jac_a, hess_a, sign_a, jac_b, hess_b, sign_b, g8, h8, 
 
 
 # ---------------------------------------------------------------------------------------
-# The pair energy straight in edge coordinates p = (e_a, theta_a, e_b, theta_b): every
-# curvature and the twist are sums of dot and triple products of the six frame vectors
-# [t_a, m1_a, m2_a, t_b, m1_b, m2_b] (blocks 0..5 of z). The energy's Hessian is
-#   sum_f k_f (grad_p f grad_p f^T + (f - f_bar) J^T (d2 f / dz2) J) + sum_c (dE/dz_c) d2 z_c/dp2,
-# and d2 f / dz2 is a combination of the bilinear forms' constant Hessians and of a few
-# outer products of z-gradients; the bilinear parts of all three terms are added with their
-# final coefficients, block by block from the frames' 3 x 4 Jacobians (never an 18 x 18
-# matrix), the outer products in p (8 x 8).
+# The pair energy straight in edge coordinates p = (e_a, theta_a, e_b, theta_b). Every
+# derivative of a frame is a rotation, dz_A/dp_r = omega_r x z_A for the three vectors z_A
+# of the edge's frame, with omega_r = t x dt/dp_r + (dm1/dp_r . m2) t read off its jet
+# (Omega: 3 x 4 per edge). So J^T (d2E/dz2) J = Omega^T Psi Omega, with Psi's three 3 x 3
+# blocks (aa, ab, bb) summed from the terms of E (every one a dot or triple product of the
+# six frame vectors, or an outer product of two gradients):
+#   - c x.y, x in frame a, y in frame b:  Psi_ab += c ((x.y) I - y x^T);
+#   - u.(x cross y), the slots x, y:  Psi_xy += (x cross y) u^T - (u.y) [x]_cross (Psi_yx its
+#     transpose; the skew part cancels on a diagonal block);
+#   - grad f grad g^T:  Psi_aa = Psi_bb += tau_f tau_g^T, Psi_ab -= tau_f tau_g^T, with the
+#     torque tau_f = sum_A z_A x df/dz_A over frame a (frame b's is -tau_f: f is invariant
+#     under a common rotation of both frames).
+# Every block costs a few 3-vector products instead of a 4 x 4 product per pair of frame
+# vectors. Terms proportional to t . m (zero: the frames are orthonormal) are left out.
+# The frames' own curvature sum_c (dE/dz_c) d2z_c/dp2 is added from the jets' Hessians.
+#
+# The scratch is one flat array of 4-wide rows addressed by constant offsets (no strides to
+# multiply, no per-call allocation or reference counting): the signed frame vectors, the
+# frames' Omega, dE/dz, the Psi blocks, Psi Omega, then 3-vectors of the kernel.
+_TA, _M1A, _M2A, _TB, _M1B, _M2B = 0, 1, 2, 3, 4, 5
+_OMA, _OMB = 6, 9               # 3 rows of 4 each
+_GZ = 12                        # 6 rows: dE/dz per frame vector (unsigned frames)
+_PAA, _PAB, _PBB, _PO = 18, 21, 24, 27
+_W, _V, _U1, _U2, _UA, _UB, _U, _S = 30, 31, 32, 33, 34, 35, 36, 37
+_TBUA, _TBUB, _UATA, _UBTA, _M1BTA, _M2BTA, _TAM1A, _TAM2A = 38, 39, 40, 41, 42, 43, 44, 45
+_TN1, _TN2, _TY = 46, 47, 48
+_O1A, _O1B, _O2A, _O2B, _O3A, _O3B, _SK, _XT = 49, 50, 51, 52, 53, 54, 55, 56
+_PAIR_ROWS = 57
 
 
 @njit(cache=True)
 def pair_edge_scratch():
-    """Scratch arrays of `pair_terms_edges` (allocate once, reuse for every pair)."""
-    return (np.empty(18), np.empty((24, 4)), np.empty((5, 18)), np.empty((5, 8)), np.empty(18),
-            np.empty((8, 8)), np.empty(3), np.empty((4, 3)))
+    """Scratch of `pair_terms_edges` (allocate once, reuse for every pair)."""
+    return np.empty(4 * _PAIR_ROWS)
 
 
 @njit(cache=True, inline="always")
-def _jt(Jz, v, out):
-    """out (8,) = J^T v for v (18,) w.r.t. z (block c reads edge c // 3)."""
-    for o in range(2):
-        for r in range(4):
-            acc = 0.0
-            for i in range(9):
-                acc += Jz[9 * o + i, r] * v[9 * o + i]
-            out[4 * o + r] = acc
+def _vcross(W, i, j, k):
+    """Row k of W = row i x row j (3-vectors of the flat scratch)."""
+    a = 4 * i
+    b = 4 * j
+    c = 4 * k
+    W[c] = W[a + 1] * W[b + 2] - W[a + 2] * W[b + 1]
+    W[c + 1] = W[a + 2] * W[b] - W[a] * W[b + 2]
+    W[c + 2] = W[a] * W[b + 1] - W[a + 1] * W[b]
 
 
 @njit(cache=True, inline="always")
-def _p_offset(A):
-    """Offset in p of the edge block A reads: blocks 0-2 (and the combination 6) edge a,
-    3-5 (and 7) edge b."""
-    return 4 * (A // 3) if A < 6 else 4 * (A - 6)
+def _vdot(W, i, j):
+    """Row i . row j of the flat scratch."""
+    a = 4 * i
+    b = 4 * j
+    return W[a] * W[b] + W[a + 1] * W[b + 1] + W[a + 2] * W[b + 2]
 
 
 @njit(cache=True, inline="always")
-def _n_cols(A):
-    """Columns of block A's Jacobian that can be non-zero: a tangent (blocks 0, 3) does not
-    depend on the twist angle (its fourth column is exactly zero)."""
-    return 3 if (A == 0 or A == 3) else 4
+def _omega(val, jac, W, row):
+    """Rows row..row+2 of W: the frame's angular velocity per p_r (1/m, 1/rad),
+    omega_r = t x dt/dp_r + (dm1/dp_r . m2) t (zero for a clamp frame's zero jet)."""
+    o = 4 * row
+    for r in range(4):
+        d0 = jac[0, r]
+        d1 = jac[1, r]
+        d2 = jac[2, r]
+        mu = jac[3, r] * val[6] + jac[4, r] * val[7] + jac[5, r] * val[8]
+        W[o + r] = val[1] * d2 - val[2] * d1 + mu * val[0]
+        W[o + 4 + r] = val[2] * d0 - val[0] * d2 + mu * val[1]
+        W[o + 8 + r] = val[0] * d1 - val[1] * d0 + mu * val[2]
 
 
 @njit(cache=True, inline="always")
-def _dot_hess(Jz, A, B, coef, M):
-    """M[p_A, p_B] += coef J_A^T J_B: one side of J^T d2(z_A . z_B)/dz2 J (the other side
-    is M's transpose, added when M is symmetrised)."""
-    pa = 3 * A
-    pb = 3 * B
-    oa = _p_offset(A)
-    ob = _p_offset(B)
-    for r in range(_n_cols(A)):
-        for s in range(_n_cols(B)):
-            M[oa + r, ob + s] += coef * (Jz[pa, r] * Jz[pb, s] + Jz[pa + 1, r] * Jz[pb + 1, s]
-                                         + Jz[pa + 2, r] * Jz[pb + 2, s])
+def _psi_block(W, oa, pr, ob, h8, ra, rb, full):
+    """h8[ra:ra+4, rb:rb+4] = Omega_a^T Psi Omega_b (Omega_a, Psi, Omega_b: rows oa, pr, ob
+    of W); only the upper triangle unless ``full``."""
+    for k in range(3):
+        for s in range(4):
+            W[4 * (_PO + k) + s] = (W[4 * (pr + k)] * W[4 * ob + s]
+                                    + W[4 * (pr + k) + 1] * W[4 * (ob + 1) + s]
+                                    + W[4 * (pr + k) + 2] * W[4 * (ob + 2) + s])
+    for r in range(4):
+        for s in range(4):
+            if full or s >= r:
+                h8[ra + r, rb + s] = (W[4 * oa + r] * W[4 * _PO + s]
+                                      + W[4 * (oa + 1) + r] * W[4 * (_PO + 1) + s]
+                                      + W[4 * (oa + 2) + r] * W[4 * (_PO + 2) + s])
 
 
 @njit(cache=True, inline="always")
-def _cross_hess(Jz, P, Q, v, vo, coef, M, W):
-    """M[p_P, p_Q] += coef J_P[:, r] . (J_Q[:, s] x v): one side of J^T d2 (z_P . (z_Q x v))
-    / dz_P dz_Q J for a fixed vector v = v[vo:vo+3]. ``W`` (4, 3) scratch."""
-    pp = 3 * P
-    pq = 3 * Q
-    op = _p_offset(P)
-    oq = _p_offset(Q)
-    v0 = v[vo]
-    v1 = v[vo + 1]
-    v2 = v[vo + 2]
-    nq = _n_cols(Q)
-    for s in range(nq):
-        W[s, 0] = coef * (Jz[pq + 1, s] * v2 - Jz[pq + 2, s] * v1)
-        W[s, 1] = coef * (Jz[pq + 2, s] * v0 - Jz[pq, s] * v2)
-        W[s, 2] = coef * (Jz[pq, s] * v1 - Jz[pq + 1, s] * v0)
-    for r in range(_n_cols(P)):
-        for s in range(nq):
-            M[op + r, oq + s] += (Jz[pp, r] * W[s, 0] + Jz[pp + 1, r] * W[s, 1]
-                                  + Jz[pp + 2, r] * W[s, 2])
+def _own_curvature(W, g, hess, h8, o):
+    """h8[o:o+4, o:o+4] (upper triangle) += sum_c (dE/dz_c) d2z_c/dp2 of one frame (dE/dz of
+    its unsigned vectors in rows g..g+2 of W)."""
+    a00 = 0.0
+    a01 = 0.0
+    a02 = 0.0
+    a03 = 0.0
+    a11 = 0.0
+    a12 = 0.0
+    a13 = 0.0
+    a22 = 0.0
+    a23 = 0.0
+    a33 = 0.0
+    for c in range(9):
+        gc = W[4 * (g + c // 3) + c % 3]
+        a00 += gc * hess[c, 0, 0]
+        a01 += gc * hess[c, 0, 1]
+        a02 += gc * hess[c, 0, 2]
+        a03 += gc * hess[c, 0, 3]
+        a11 += gc * hess[c, 1, 1]
+        a12 += gc * hess[c, 1, 2]
+        a13 += gc * hess[c, 1, 3]
+        a22 += gc * hess[c, 2, 2]
+        a23 += gc * hess[c, 2, 3]
+        a33 += gc * hess[c, 3, 3]
+    h8[o, o] += a00
+    h8[o, o + 1] += a01
+    h8[o, o + 2] += a02
+    h8[o, o + 3] += a03
+    h8[o + 1, o + 1] += a11
+    h8[o + 1, o + 2] += a12
+    h8[o + 1, o + 3] += a13
+    h8[o + 2, o + 2] += a22
+    h8[o + 2, o + 3] += a23
+    h8[o + 3, o + 3] += a33
 
-
-@njit(cache=True, inline="always")
-def _cross_into(z, P, Q, out, o):
-    """out[o:o+3] = z_P x z_Q."""
-    p = 3 * P
-    q = 3 * Q
-    out[o] = z[p + 1] * z[q + 2] - z[p + 2] * z[q + 1]
-    out[o + 1] = z[p + 2] * z[q] - z[p] * z[q + 2]
-    out[o + 2] = z[p] * z[q + 1] - z[p + 1] * z[q]
 
 
 @njit(cache=True)
@@ -469,82 +508,34 @@ def pair_terms_edges(val_a, jac_a, hess_a, sign_a, val_b, jac_b, hess_b, sign_b,
     jets (`material_frame_jet`; sign -1: the edge enters against its direction). The same
     energy as `bending_terms` + `twist_terms` carried by `chain_pair`, without any 18 x 18
     matrix and without allocation (``ws``: `pair_edge_scratch`)."""
-    z, Jz, gz, gp, G, M, U, W = ws
-    # signed frame vectors and their derivatives: z = [t_a, m1_a, m2_a, t_b, m1_b, m2_b]
-    for c in range(9):
-        fa = sign_a if (c < 3 or c >= 6) else 1.0
-        fb = sign_b if (c < 3 or c >= 6) else 1.0
-        z[c] = fa * val_a[c]
-        z[9 + c] = fb * val_b[c]
-        for r in range(4):
-            Jz[c, r] = fa * jac_a[c, r]
-            Jz[9 + c, r] = fb * jac_b[c, r]
-    # z-gradients (rows of gz): 0 D = 1 + t_a.t_b, 1 N1 = (m2_a + m2_b).(t_a x t_b),
-    # 2 N2 = -(m1_a + m1_b).(t_a x t_b), 3 X = 1 + tr Q, 4 Y = t_a.(m1_a x m1_b + m2_a x m2_b)
-    for i in range(5):
-        for j in range(18):
-            gz[i, j] = 0.0
-    _cross_into(z, 0, 3, U, 0)  # U = t_a x t_b
-    D = 1.0
-    X = 1.0
-    N1 = 0.0
-    N2 = 0.0
+    W = ws
+    # signed frame vectors z = [t_a, m1_a, m2_a, t_b, m1_b, m2_b]; a reversed edge enters as
+    # (-t, m1, -m2), which rotates with the same omega
     for k in range(3):
-        ta = z[k]
-        tb = z[9 + k]
-        D += ta * tb
-        X += z[3 + k] * z[12 + k] + z[6 + k] * z[15 + k]
-        N1 += (z[6 + k] + z[15 + k]) * U[k]
-        N2 -= (z[3 + k] + z[12 + k]) * U[k]
-        gz[0, k] = tb
-        gz[0, 9 + k] = ta
-        gz[1, 6 + k] = U[k]
-        gz[1, 15 + k] = U[k]
-        gz[2, 3 + k] = -U[k]
-        gz[2, 12 + k] = -U[k]
-        gz[3, k] = tb
-        gz[3, 9 + k] = ta
-        gz[3, 3 + k] = z[12 + k]
-        gz[3, 12 + k] = z[3 + k]
-        gz[3, 6 + k] = z[15 + k]
-        gz[3, 15 + k] = z[6 + k]
-    X += D - 1.0
-    # d N / d t_a = t_b x u, d N / d t_b = u x t_a (u the director sum of N1, N2)
+        W[4 * _TA + k] = sign_a * val_a[k]
+        W[4 * _M1A + k] = val_a[3 + k]
+        W[4 * _M2A + k] = sign_a * val_a[6 + k]
+        W[4 * _TB + k] = sign_b * val_b[k]
+        W[4 * _M1B + k] = val_b[3 + k]
+        W[4 * _M2B + k] = sign_b * val_b[6 + k]
+    _omega(val_a, jac_a, W, _OMA)
+    _omega(val_b, jac_b, W, _OMB)
+    # D = 1 + t_a.t_b, N1 = u1.w, N2 = -u2.w (w = t_a x t_b, u1 = m2_a + m2_b,
+    # u2 = m1_a + m1_b), X = 1 + tr Q, Y = t_a.V (V = m1_a x m1_b + m2_a x m2_b)
+    _vcross(W, _TA, _TB, _W)
+    _vcross(W, _M1A, _M1B, _V)
+    _vcross(W, _M2A, _M2B, _S)
     for k in range(3):
-        k1_ = (k + 1) % 3
-        k2_ = (k + 2) % 3
-        u1a = z[6 + k1_] + z[15 + k1_]
-        u1b = z[6 + k2_] + z[15 + k2_]
-        u2a = -(z[3 + k1_] + z[12 + k1_])
-        u2b = -(z[3 + k2_] + z[12 + k2_])
-        gz[1, k] = z[9 + k1_] * u1b - z[9 + k2_] * u1a
-        gz[1, 9 + k] = u1a * z[k2_] - u1b * z[k1_]
-        gz[2, k] = z[9 + k1_] * u2b - z[9 + k2_] * u2a
-        gz[2, 9 + k] = u2a * z[k2_] - u2b * z[k1_]
-    # Y = t_a . (m1_a x m1_b) + t_a . (m2_a x m2_b)
-    _cross_into(z, 1, 4, U, 0)
-    Y = z[0] * U[0] + z[1] * U[1] + z[2] * U[2]
-    for k in range(3):
-        gz[4, k] = U[k]
-    _cross_into(z, 2, 5, U, 0)
-    Y += z[0] * U[0] + z[1] * U[1] + z[2] * U[2]
-    for k in range(3):
-        gz[4, k] += U[k]
-    _cross_into(z, 4, 0, U, 0)  # d/dm1_a = m1_b x t_a
-    for k in range(3):
-        gz[4, 3 + k] = U[k]
-    _cross_into(z, 0, 1, U, 0)  # d/dm1_b = t_a x m1_a
-    for k in range(3):
-        gz[4, 12 + k] = U[k]
-    _cross_into(z, 5, 0, U, 0)
-    for k in range(3):
-        gz[4, 6 + k] = U[k]
-    _cross_into(z, 0, 2, U, 0)
-    for k in range(3):
-        gz[4, 15 + k] = U[k]
-    for i in range(5):
-        _jt(Jz, gz[i], gp[i])
-    # the three terms: kappa1 = N1 / D, kappa2 = N2 / D, psi = 2 atan2(Y, X)
+        W[4 * _V + k] += W[4 * _S + k]
+        W[4 * _U1 + k] = W[4 * _M2A + k] + W[4 * _M2B + k]
+        W[4 * _U2 + k] = W[4 * _M1A + k] + W[4 * _M1B + k]
+    tab = _vdot(W, _TA, _TB)
+    D = 1.0 + tab
+    X = D + _vdot(W, _M1A, _M1B) + _vdot(W, _M2A, _M2B)
+    N1 = _vdot(W, _U1, _W)
+    N2 = -_vdot(W, _U2, _W)
+    Y = _vdot(W, _TA, _V)
+    # kappa1 = N1 / D, kappa2 = N2 / D, psi = 2 atan2(Y, X)
     kap1 = N1 / D
     kap2 = N2 / D
     d1 = kap1 - kappa1_bar
@@ -553,79 +544,139 @@ def pair_terms_edges(val_a, jac_a, hess_a, sign_a, val_b, jac_b, hess_b, sign_b,
     psi = 2.0 * np.arctan2(Y, X)
     dt = psi - psi_bar
     energy = 0.5 * (k1 * d1 * d1 + k2 * d2 * d2 + kt * dt * dt)
+    # dE = c1 (dN1 - kappa1 dD) + c2 (dN2 - kappa2 dD) + cy dY + cx dX
     c1 = k1 * d1 / D
     c2 = k2 * d2 / D
-    ct = kt * dt
-    # dE/dz and dE/dp; gradients of kappa = (gN - kappa gD) / D, of psi = 2 (X gY - Y gX) / r2
-    for j in range(18):
-        G[j] = (c1 * (gz[1, j] - kap1 * gz[0, j]) + c2 * (gz[2, j] - kap2 * gz[0, j])
-                + ct * 2.0 * (X * gz[4, j] - Y * gz[3, j]) / r2)
-    for r in range(8):
-        g1 = (gp[1, r] - kap1 * gp[0, r]) / D
-        g2 = (gp[2, r] - kap2 * gp[0, r]) / D
-        gt = 2.0 * (X * gp[4, r] - Y * gp[3, r]) / r2
-        g8[r] = k1 * d1 * g1 + k2 * d2 * g2 + ct * gt
-        gp[1, r] = g1  # gp rows now: 0 dD, 1 dkappa1, 2 dkappa2, 3 dX, 4 dY (p)
-        gp[2, r] = g2
-    # bilinear parts, one-sided into M (symmetrised below):
-    # k d J^T(d2 kappa)J -> c (d2 N - kappa d2 D), k d J^T(d2 psi)J -> ct 2 (X d2 Y - Y d2 X)/r2
-    for r in range(8):
-        for s in range(8):
-            M[r, s] = 0.0
-    cy = ct * 2.0 * X / r2
-    cx = -ct * 2.0 * Y / r2
-    _dot_hess(Jz, 0, 3, cx - c1 * kap1 - c2 * kap2, M)
-    _dot_hess(Jz, 1, 4, cx, M)
-    _dot_hess(Jz, 2, 5, cx, M)
-    # N1 + N2 = U . (t_a x t_b), U = c1 (m2_a + m2_b) - c2 (m1_a + m1_b) (coefficients in)
+    ctw = kt * dt
+    cx = -2.0 * ctw * Y / r2
+    cy = 2.0 * ctw * X / r2
+    cD = cx - c1 * kap1 - c2 * kap2  # of t_a.t_b, in D and in X
+    # c1 N1 + c2 N2 = U.w, U = Ua + Ub = c1 u1 - c2 u2 (linear in the directors)
     for k in range(3):
-        U[k] = c1 * (z[6 + k] + z[15 + k]) - c2 * (z[3 + k] + z[12 + k])
-    _cross_hess(Jz, 0, 3, U, 0, 1.0, M, W)  # (t_a, t_b) with u
-    # u's Jacobian on each edge, blocks 6 (edge a) and 7 (edge b) of Jz
+        W[4 * _UA + k] = c1 * W[4 * _M2A + k] - c2 * W[4 * _M1A + k]
+        W[4 * _UB + k] = c1 * W[4 * _M2B + k] - c2 * W[4 * _M1B + k]
+        W[4 * _U + k] = W[4 * _UA + k] + W[4 * _UB + k]
+    _vcross(W, _TB, _UA, _TBUA)
+    _vcross(W, _TB, _UB, _TBUB)
+    _vcross(W, _UA, _TA, _UATA)
+    _vcross(W, _UB, _TA, _UBTA)
+    _vcross(W, _M1B, _TA, _M1BTA)
+    _vcross(W, _M2B, _TA, _M2BTA)
+    _vcross(W, _TA, _M1A, _TAM1A)
+    _vcross(W, _TA, _M2A, _TAM2A)
+    # dE/dz, carried to the unsigned frames (t and m2 of a reversed edge flip)
     for k in range(3):
-        for r in range(4):
-            Jz[18 + k, r] = c1 * Jz[6 + k, r] - c2 * Jz[3 + k, r]
-            Jz[21 + k, r] = c1 * Jz[15 + k, r] - c2 * Jz[12 + k, r]
-    for P in (6, 7):
-        _cross_hess(Jz, P, 0, z, 9, 1.0, M, W)  # u . (t_a x t_b): (u, t_a) with t_b
-        _cross_hess(Jz, 3, P, z, 0, 1.0, M, W)  # (t_b, u) with t_a
-    # Y: t_a . (m_a x m_b) for m = m1, m2
-    for A in (1, 2):
-        B = A + 3
-        _cross_hess(Jz, 0, A, z, 3 * B, cy, M, W)
-        _cross_hess(Jz, A, B, z, 0, cy, M, W)
-        _cross_hess(Jz, B, 0, z, 3 * A, cy, M, W)
-    # outer products in p, the frames' own curvature, symmetrisation
-    c4 = ct * 2.0 / (r2 * r2)
-    sym = c4 * (Y * Y - X * X)
-    crs = c4 * 2.0 * X * Y
-    for r in range(8):
-        # reuse gz's first two rows for d psi/dp and c1 d kappa1/dp + c2 d kappa2/dp
-        gz[0, r] = 2.0 * (X * gp[4, r] - Y * gp[3, r]) / r2
-        gz[1, r] = c1 * gp[1, r] + c2 * gp[2, r]
-    for r in range(8):
-        a_r = gp[3, r]
-        b_r = gp[4, r]
-        g1_r = k1 * gp[1, r]
-        g2_r = k2 * gp[2, r]
-        gt_r = kt * gz[0, r]
-        w_r = gz[1, r]
-        dD_r = gp[0, r]
-        for s in range(r, 8):
-            a_s = gp[3, s]
-            b_s = gp[4, s]
-            h = (M[r, s] + M[s, r] + g1_r * gp[1, s] + g2_r * gp[2, s] + gt_r * gz[0, s]
-                 - w_r * gp[0, s] - dD_r * gz[1, s]
-                 + sym * (a_r * b_s + b_r * a_s) + crs * (a_r * a_s - b_r * b_s))
-            h8[r, s] = h
-    # the frames' own curvature sum_c (dE/dz_c) d2 z_c / dp2 (z_c = sign val_c)
-    for c in range(9):
-        ga = G[c] * (sign_a if (c < 3 or c >= 6) else 1.0)
-        gb = G[9 + c] * (sign_b if (c < 3 or c >= 6) else 1.0)
-        for r in range(4):
-            for s in range(r, 4):
-                h8[r, s] += ga * hess_a[c, r, s]
-                h8[4 + r, 4 + s] += gb * hess_b[c, r, s]
+        w = W[4 * _W + k]
+        W[4 * _GZ + k] = sign_a * (cD * W[4 * _TB + k] + W[4 * _TBUA + k] + W[4 * _TBUB + k]
+                                   + cy * W[4 * _V + k])
+        W[4 * _GZ + 4 + k] = cx * W[4 * _M1B + k] - c2 * w + cy * W[4 * _M1BTA + k]
+        W[4 * _GZ + 8 + k] = sign_a * (cx * W[4 * _M2B + k] + c1 * w + cy * W[4 * _M2BTA + k])
+        W[4 * _GZ + 12 + k] = sign_b * (cD * W[4 * _TA + k] + W[4 * _UATA + k]
+                                        + W[4 * _UBTA + k])
+        W[4 * _GZ + 16 + k] = cx * W[4 * _M1A + k] - c2 * w + cy * W[4 * _TAM1A + k]
+        W[4 * _GZ + 20 + k] = sign_b * (cx * W[4 * _M2A + k] + c1 * w + cy * W[4 * _TAM2A + k])
+    # dE/dp = J^T dE/dz
+    for r in range(4):
+        acc_a = 0.0
+        acc_b = 0.0
+        for A in range(3):
+            for k in range(3):
+                acc_a += W[4 * (_GZ + A) + k] * jac_a[3 * A + k, r]
+                acc_b += W[4 * (_GZ + 3 + A) + k] * jac_b[3 * A + k, r]
+        g8[r] = acc_a
+        g8[4 + r] = acc_b
+    # torques on frame a of N1 = t_a x (t_b x u1) + m2_a x w, N2 = -(t_a x (t_b x u2)
+    # + m1_a x w), Y = t_a x V + m1_a x (m1_b x t_a) + m2_a x (m2_b x t_a); D: w; X: w + V
+    _vcross(W, _TB, _U1, _S)
+    _vcross(W, _TA, _S, _TN1)
+    _vcross(W, _M2A, _W, _S)
+    for k in range(3):
+        W[4 * _TN1 + k] += W[4 * _S + k]
+    _vcross(W, _TB, _U2, _S)
+    _vcross(W, _TA, _S, _TN2)
+    _vcross(W, _M1A, _W, _S)
+    for k in range(3):
+        W[4 * _TN2 + k] = -(W[4 * _TN2 + k] + W[4 * _S + k])
+    _vcross(W, _TA, _V, _TY)
+    _vcross(W, _M1A, _M1BTA, _S)
+    for k in range(3):
+        W[4 * _TY + k] += W[4 * _S + k]
+    _vcross(W, _M2A, _M2BTA, _S)
+    for k in range(3):
+        W[4 * _TY + k] += W[4 * _S + k]
+    # The outer products, as sum_m (a_m b_m^T + b_m a_m^T) in torques:
+    # k1 g1 g1^T - c1 (g1 gD^T + gD g1^T) (g1 = grad kappa1), the same for kappa2, and
+    # 4 kt beta beta^T - 2 kt (psi - psi_bar) (alpha beta^T + beta alpha^T) from the Hessian
+    # of psi, 2 (X HY - Y HX) / r2 - 2 (alpha beta^T + beta alpha^T), with
+    # beta = (X gY - Y gX) / r2 = grad psi / 2, alpha = (X gX + Y gY) / r2.
+    iD = 1.0 / D
+    ir2 = 1.0 / r2
+    s_u = -_vdot(W, _U, _TB)
+    s_1 = -cy * _vdot(W, _TA, _M1B)
+    s_2 = -cy * _vdot(W, _TA, _M2B)
+    for k in range(3):
+        w = W[4 * _W + k]
+        g1 = (W[4 * _TN1 + k] - kap1 * w) * iD
+        g2 = (W[4 * _TN2 + k] - kap2 * w) * iD
+        gX = w + W[4 * _V + k]
+        gY = W[4 * _TY + k]
+        beta = (X * gY - Y * gX) * ir2
+        alpha = (X * gX + Y * gY) * ir2
+        W[4 * _O1A + k] = g1
+        W[4 * _O1B + k] = 0.5 * k1 * g1 - c1 * w
+        W[4 * _O2A + k] = g2
+        W[4 * _O2B + k] = 0.5 * k2 * g2 - c2 * w
+        W[4 * _O3A + k] = beta
+        W[4 * _O3B + k] = 2.0 * kt * beta - 2.0 * ctw * alpha
+        W[4 * _SK + k] = (s_u * W[4 * _TA + k] + tab * W[4 * _UB + k] + s_1 * W[4 * _M1A + k]
+                          + s_2 * W[4 * _M2A + k])
+        W[4 * _XT + k] = cy * W[4 * _V + k] - cD * W[4 * _TB + k]
+    # Psi blocks, sym(M) = M + M^T, [v] = the cross-product matrix of v:
+    # - dot products cD t_a.t_b + cx (m1_a.m1_b + m2_a.m2_b): Psi_ab += tr(S) I - S,
+    #   S = cD t_b t_a^T + cx (m1_b m1_a^T + m2_b m2_a^T);
+    # - U.(t_a x t_b): Psi_ab += w U^T - (U.t_b) [t_a] + t_a (t_b x Ua)^T + t_b (Ub x t_a)^T
+    #   + (t_a.t_b) [Ub], Psi_aa += sym((Ua x t_a) t_b^T), Psi_bb += sym((t_b x Ub) t_a^T);
+    # - cy t_a.(m_a x m_b), m = m1, m2: Psi_ab += cy (V t_a^T - (t_a.m_b) [m_a]
+    #   + m_a (m_b x t_a)^T), Psi_aa += cy sym((t_a x m_a) m_b^T);
+    # the skew parts are gathered in [SK], the terms x t_a^T in XT t_a^T
+    trS = cD * tab + cx * (X - D)
+    for k in range(3):
+        for l in range(3):
+            o = (W[4 * _O1A + k] * W[4 * _O1B + l] + W[4 * _O1B + k] * W[4 * _O1A + l]
+                 + W[4 * _O2A + k] * W[4 * _O2B + l] + W[4 * _O2B + k] * W[4 * _O2A + l]
+                 + W[4 * _O3A + k] * W[4 * _O3B + l] + W[4 * _O3B + k] * W[4 * _O3A + l])
+            W[4 * (_PAB + k) + l] = (
+                W[4 * _W + k] * W[4 * _U + l] + W[4 * _TA + k] * W[4 * _TBUA + l]
+                + W[4 * _TB + k] * W[4 * _UBTA + l] + W[4 * _XT + k] * W[4 * _TA + l]
+                + cy * (W[4 * _M1A + k] * W[4 * _M1BTA + l] + W[4 * _M2A + k] * W[4 * _M2BTA + l])
+                - cx * (W[4 * _M1B + k] * W[4 * _M1A + l] + W[4 * _M2B + k] * W[4 * _M2A + l])
+                - o)
+            if l >= k:
+                paa = (o + W[4 * _UATA + k] * W[4 * _TB + l] + W[4 * _TB + k] * W[4 * _UATA + l]
+                       + cy * (W[4 * _TAM1A + k] * W[4 * _M1B + l]
+                               + W[4 * _M1B + k] * W[4 * _TAM1A + l]
+                               + W[4 * _TAM2A + k] * W[4 * _M2B + l]
+                               + W[4 * _M2B + k] * W[4 * _TAM2A + l]))
+                pbb = o + W[4 * _TBUB + k] * W[4 * _TA + l] + W[4 * _TA + k] * W[4 * _TBUB + l]
+                W[4 * (_PAA + k) + l] = paa
+                W[4 * (_PAA + l) + k] = paa
+                W[4 * (_PBB + k) + l] = pbb
+                W[4 * (_PBB + l) + k] = pbb
+    for k in range(3):
+        W[4 * (_PAB + k) + k] += trS
+    W[4 * _PAB + 1] -= W[4 * _SK + 2]
+    W[4 * _PAB + 2] += W[4 * _SK + 1]
+    W[4 * (_PAB + 1)] += W[4 * _SK + 2]
+    W[4 * (_PAB + 1) + 2] -= W[4 * _SK]
+    W[4 * (_PAB + 2)] -= W[4 * _SK + 1]
+    W[4 * (_PAB + 2) + 1] += W[4 * _SK]
+    # Omega^T Psi Omega, block by block (upper triangle of the diagonal blocks)
+    _psi_block(W, _OMA, _PAA, _OMA, h8, 0, 0, False)
+    _psi_block(W, _OMA, _PAB, _OMB, h8, 0, 4, True)
+    _psi_block(W, _OMB, _PBB, _OMB, h8, 4, 4, False)
+    # the frames' own curvature
+    _own_curvature(W, _GZ, hess_a, h8, 0)
+    _own_curvature(W, _GZ + 3, hess_b, h8, 4)
     for r in range(8):
         for s in range(r + 1, 8):
             h8[s, r] = h8[r, s]

@@ -85,6 +85,7 @@ def transport_frames(t_source, d_source, t_new):
     return d
 
 
+@njit(cache=True)
 def canonical_twist_offset(t0, d0, t, d_ref):
     """(n,) rad: the angle about ``t`` from the reference directors ``d_ref`` (n, 3) to the
     *canonical* ones, the stress-free directors ``d0`` carried from their tangents ``t0``
@@ -93,16 +94,34 @@ def canonical_twist_offset(t0, d0, t, d_ref):
     convention that depends on the configuration only, not on the path that led to it
     (time-parallel frames pick up a holonomy along a path that turns in 3-D). Zero where an
     edge has turned back on its stress-free direction (no canonical frame there)."""
-    c = np.einsum("ij,ij->i", t0, t)
-    w = np.cross(t0, t)
-    ok = 1.0 + c > 1e-8
-    f = np.where(ok, np.einsum("ij,ij->i", w, d0) / np.where(ok, 1.0 + c, 1.0), 0.0)
-    canon = c[:, None] * d0 + np.cross(w, d0) + f[:, None] * w
-    canon -= np.einsum("ij,ij->i", canon, t)[:, None] * t
-    canon /= np.linalg.norm(canon, axis=1)[:, None]
-    off = np.arctan2(np.einsum("ij,ij->i", np.cross(d_ref, canon), t),
-                     np.einsum("ij,ij->i", d_ref, canon))
-    return np.where(ok, off, 0.0)
+    n = t.shape[0]
+    out = np.zeros(n)
+    canon = np.empty(3)
+    for j in range(n):
+        c = t0[j, 0] * t[j, 0] + t0[j, 1] * t[j, 1] + t0[j, 2] * t[j, 2]
+        if not 1.0 + c > 1e-8:
+            continue
+        w0 = t0[j, 1] * t[j, 2] - t0[j, 2] * t[j, 1]
+        w1 = t0[j, 2] * t[j, 0] - t0[j, 0] * t[j, 2]
+        w2 = t0[j, 0] * t[j, 1] - t0[j, 1] * t[j, 0]
+        f = (w0 * d0[j, 0] + w1 * d0[j, 1] + w2 * d0[j, 2]) / (1.0 + c)
+        canon[0] = c * d0[j, 0] + (w1 * d0[j, 2] - w2 * d0[j, 1]) + f * w0
+        canon[1] = c * d0[j, 1] + (w2 * d0[j, 0] - w0 * d0[j, 2]) + f * w1
+        canon[2] = c * d0[j, 2] + (w0 * d0[j, 1] - w1 * d0[j, 0]) + f * w2
+        ct = canon[0] * t[j, 0] + canon[1] * t[j, 1] + canon[2] * t[j, 2]
+        for k in range(3):
+            canon[k] -= ct * t[j, k]
+        norm = np.sqrt(canon[0] * canon[0] + canon[1] * canon[1] + canon[2] * canon[2])
+        for k in range(3):
+            canon[k] /= norm
+        # angle from d_ref to canon about t
+        x0 = d_ref[j, 1] * canon[2] - d_ref[j, 2] * canon[1]
+        x1 = d_ref[j, 2] * canon[0] - d_ref[j, 0] * canon[2]
+        x2 = d_ref[j, 0] * canon[1] - d_ref[j, 1] * canon[0]
+        sin_ = x0 * t[j, 0] + x1 * t[j, 1] + x2 * t[j, 2]
+        cos_ = d_ref[j, 0] * canon[0] + d_ref[j, 1] * canon[1] + d_ref[j, 2] * canon[2]
+        out[j] = np.arctan2(sin_, cos_)
+    return out
 
 
 def reference_twist(tangents, directors, pairs):
@@ -124,13 +143,17 @@ def material_directors(directors, tangents, theta):
     return c * directors + s * b, -s * directors + c * b
 
 
+# The jet kernel's scratch: one flat array addressed by constant offsets (no strides to
+# multiply, no per-call allocation): r = t + t_src (3), T1 = dt/de (3 x 3), a = d phi/de
+# (2 x 3: m1, m2), phi (2), S (2 x 3 x 3).
+_JR, _JT1, _JA, _JPH, _JS = 0, 3, 12, 18, 20
+_JET_SIZE = 38
+
+
 @njit(cache=True)
 def frame_jet_scratch():
-    """Scratch arrays of `material_frame_jet_ws` (allocate once, reuse for every edge)."""
-    return (np.empty(3), np.empty((3, 3)), np.empty((3, 3, 3)), np.empty(3), np.empty((3, 3)),
-            np.empty(3), np.empty(3), np.empty((3, 3)), np.empty((3, 3, 3)), np.empty((3, 3)),
-            np.empty((3, 3, 3)), np.empty((3, 3, 3)), np.empty(3), np.empty((3, 3)),
-            np.empty((3, 3, 3)), np.empty((3, 3)), np.empty(3))
+    """Scratch of `material_frame_jet_ws` (allocate once, reuse for every edge)."""
+    return np.empty(_JET_SIZE)
 
 
 @njit(cache=True)
@@ -148,144 +171,95 @@ def material_frame_jet(e, theta, t_src, d_src, val, jac, hess):
 @njit(cache=True)
 def material_frame_jet_ws(e, theta, t_src, d_src, val, jac, hess, ws):
     """`material_frame_jet` writing its intermediates into ``ws`` (from
-    `frame_jet_scratch`): no allocation, for the assembly loop."""
-    t, T1, T2, w, W, u, d, D1, D2, dE, DT, dEE, b, bE, bEE, om, ga = ws
+    `frame_jet_scratch`): no allocation, for the assembly loop.
+
+    The transport of a vector v normal to t_src is P v = v - phi r, r = t + t_src,
+    phi = (t . v) / (1 + t . t_src) = (e . v) / n with n = |e| + e . t_src; as dn/de = r,
+    d phi/de = (v - phi r) / n = P v / n. P is a rotation (t_src to t), so each material
+    director is m = P v of a fixed source vector (m1: v = cos(theta) d_src + sin(theta)
+    t_src x d_src; m2: v = t_src x (m1's v)), and with a = m / n, T1 = dt/de =
+    (I - t t^T) / |e| (1/m) and T2 = d2t/de2 (1/m^2):
+        dm/de = -r a^T - phi T1,
+        d2m_k/de_i de_j = r_k S_ij - a_i T1_kj - a_j T1_ki - phi T2_kij,
+        S = (a r^T + r a^T + phi T1) / n;
+    d/dtheta turns the frame about t (dm1 = m2, dm2 = -m1)."""
     ell = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
     inv = 1.0 / ell
-    for k in range(3):
-        t[k] = e[k] * inv
-    # dt/de and d2t/de2
-    for k in range(3):
-        for i in range(3):
-            T1[k, i] = ((1.0 if k == i else 0.0) - t[k] * t[i]) * inv
     inv2 = inv * inv
     for k in range(3):
-        for i in range(3):
-            for j in range(i, 3):
-                v = (3.0 * t[i] * t[j] * t[k]
-                     - (t[i] if j == k else 0.0)
-                     - (t[j] if i == k else 0.0)
-                     - (t[k] if i == j else 0.0)) * inv2
-                T2[k, i, j] = v
-                T2[k, j, i] = v
-    # d(t) = c d_src + w x d_src + w (w . d_src) / (1 + c), c = t_src . t, w = t_src x t;
-    # c and w are linear in t, so all its derivatives w.r.t. the vector t are closed form.
-    c = t_src[0] * t[0] + t_src[1] * t[1] + t_src[2] * t[2]
-    w[0] = t_src[1] * t[2] - t_src[2] * t[1]
-    w[1] = t_src[2] * t[0] - t_src[0] * t[2]
-    w[2] = t_src[0] * t[1] - t_src[1] * t[0]
-    s = w[0] * d_src[0] + w[1] * d_src[1] + w[2] * d_src[2]
-    A = 1.0 / (1.0 + c)
-    W[0, 0] = 0.0
-    W[0, 1] = t_src[2]
-    W[0, 2] = -t_src[1]
-    W[1, 0] = -t_src[2]
-    W[1, 1] = 0.0
-    W[1, 2] = t_src[0]
-    W[2, 0] = t_src[1]
-    W[2, 1] = -t_src[0]
-    W[2, 2] = 0.0
-    for j in range(3):
-        u[j] = W[j, 0] * d_src[0] + W[j, 1] * d_src[1] + W[j, 2] * d_src[2]
-    d[0] = c * d_src[0] + (w[1] * d_src[2] - w[2] * d_src[1]) + w[0] * s * A
-    d[1] = c * d_src[1] + (w[2] * d_src[0] - w[0] * d_src[2]) + w[1] * s * A
-    d[2] = c * d_src[2] + (w[0] * d_src[1] - w[1] * d_src[0]) + w[2] * s * A
-    for j in range(3):
-        # W_j x d_src
-        cx0 = W[j, 1] * d_src[2] - W[j, 2] * d_src[1]
-        cx1 = W[j, 2] * d_src[0] - W[j, 0] * d_src[2]
-        cx2 = W[j, 0] * d_src[1] - W[j, 1] * d_src[0]
-        for k in range(3):
-            cxk = cx0 if k == 0 else (cx1 if k == 1 else cx2)
-            D1[k, j] = (t_src[j] * d_src[k] + cxk + W[j, k] * s * A + w[k] * u[j] * A
-                        - w[k] * s * A * A * t_src[j])
-    # D2[k, i, j] = A (W[j, k] (u[i] - A s t_src[i]) + W[i, k] (u[j] - A s t_src[j]))
-    #   - A^2 w[k] (t_src[i] (u[j] - A s t_src[j]) + t_src[j] (u[i] - A s t_src[i]))
-    #   = A (om[j, k] ga[i] + om[i, k] ga[j]), ga = u - A s t_src, om = W - A t_src w^T
-    for i in range(3):
-        ga[i] = u[i] - A * s * t_src[i]
-        for k in range(3):
-            om[i, k] = W[i, k] - A * t_src[i] * w[k]
+        val[k] = e[k] * inv
+    q = 1.0 / (1.0 + t_src[0] * val[0] + t_src[1] * val[1] + t_src[2] * val[2])
+    n_inv = q * inv
     for k in range(3):
-        for i in range(3):
-            for j in range(i, 3):
-                v = A * (om[j, k] * ga[i] + om[i, k] * ga[j])
-                D2[k, i, j] = v
-                D2[k, j, i] = v
-    # chain to the edge vector: dd/de = D1 T1, d2d/de2 = D1 T2 + T1^T D2 T1
-    for k in range(3):
-        for i in range(3):
-            acc = 0.0
-            for m in range(3):
-                acc += D1[k, m] * T1[m, i]
-            dE[k, i] = acc
-    for k in range(3):
-        for m in range(3):
-            for j in range(3):
-                acc = 0.0
-                for n in range(3):
-                    acc += D2[k, m, n] * T1[n, j]
-                DT[k, m, j] = acc
-    for k in range(3):
-        for i in range(3):
-            for j in range(i, 3):
-                acc = 0.0
-                for m in range(3):
-                    acc += D1[k, m] * T2[m, i, j] + T1[m, i] * DT[k, m, j]
-                dEE[k, i, j] = acc
-                dEE[k, j, i] = acc
-    # b = t x d and its derivatives
-    b[0] = t[1] * d[2] - t[2] * d[1]
-    b[1] = t[2] * d[0] - t[0] * d[2]
-    b[2] = t[0] * d[1] - t[1] * d[0]
-    for i in range(3):
-        # dt_i x d + t x dd_i
-        bE[0, i] = (T1[1, i] * d[2] - T1[2, i] * d[1]) + (t[1] * dE[2, i] - t[2] * dE[1, i])
-        bE[1, i] = (T1[2, i] * d[0] - T1[0, i] * d[2]) + (t[2] * dE[0, i] - t[0] * dE[2, i])
-        bE[2, i] = (T1[0, i] * d[1] - T1[1, i] * d[0]) + (t[0] * dE[1, i] - t[1] * dE[0, i])
-    for k in range(3):
-        k1 = (k + 1) % 3
-        k2 = (k + 2) % 3
-        for i in range(3):
-            for j in range(i, 3):
-                v = (T2[k1, i, j] * d[k2] - T2[k2, i, j] * d[k1]
-                     + T1[k1, i] * dE[k2, j] - T1[k2, i] * dE[k1, j]
-                     + T1[k1, j] * dE[k2, i] - T1[k2, j] * dE[k1, i]
-                     + t[k1] * dEE[k2, i, j] - t[k2] * dEE[k1, i, j])
-                bEE[k, i, j] = v
-                bEE[k, j, i] = v
+        ws[_JR + k] = val[k] + t_src[k]
+    bs0 = t_src[1] * d_src[2] - t_src[2] * d_src[1]
+    bs1 = t_src[2] * d_src[0] - t_src[0] * d_src[2]
+    bs2 = t_src[0] * d_src[1] - t_src[1] * d_src[0]
     ct = np.cos(theta)
     st = np.sin(theta)
+    for o in range(2):
+        # source director of m1 (o = 0) and m2 (o = 1)
+        ca = ct if o == 0 else -st
+        cb = st if o == 0 else ct
+        v0 = ca * d_src[0] + cb * bs0
+        v1 = ca * d_src[1] + cb * bs1
+        v2 = ca * d_src[2] + cb * bs2
+        phi = (val[0] * v0 + val[1] * v1 + val[2] * v2) * q
+        ws[_JPH + o] = phi
+        val[3 + 3 * o] = v0 - phi * ws[_JR]
+        val[4 + 3 * o] = v1 - phi * ws[_JR + 1]
+        val[5 + 3 * o] = v2 - phi * ws[_JR + 2]
+        for k in range(3):
+            ws[_JA + 3 * o + k] = val[3 + 3 * o + k] * n_inv
     for k in range(3):
-        val[k] = t[k]
-        val[3 + k] = ct * d[k] + st * b[k]
-        val[6 + k] = -st * d[k] + ct * b[k]
-        jac[k, 3] = 0.0  # the tangent does not depend on the twist angle
-        for i in range(4):
-            hess[k, i, 3] = 0.0
-            hess[k, 3, i] = 0.0
+        for i in range(k, 3):
+            v = ((1.0 if k == i else 0.0) - val[k] * val[i]) * inv
+            ws[_JT1 + 3 * k + i] = v
+            ws[_JT1 + 3 * i + k] = v
+    for o in range(2):
+        phi = ws[_JPH + o]
         for i in range(3):
-            jac[k, i] = T1[k, i]
-            jac[3 + k, i] = ct * dE[k, i] + st * bE[k, i]
-            jac[6 + k, i] = -st * dE[k, i] + ct * bE[k, i]
             for j in range(i, 3):
-                h0 = T2[k, i, j]
-                h1 = ct * dEE[k, i, j] + st * bEE[k, i, j]
-                h2 = -st * dEE[k, i, j] + ct * bEE[k, i, j]
-                hess[k, i, j] = h0
-                hess[k, j, i] = h0
-                hess[3 + k, i, j] = h1
-                hess[3 + k, j, i] = h1
-                hess[6 + k, i, j] = h2
-                hess[6 + k, j, i] = h2
+                v = (ws[_JA + 3 * o + i] * ws[_JR + j] + ws[_JA + 3 * o + j] * ws[_JR + i]
+                     + phi * ws[_JT1 + 3 * i + j]) * n_inv
+                ws[_JS + 9 * o + 3 * i + j] = v
+                ws[_JS + 9 * o + 3 * j + i] = v
     for k in range(3):
-        # d m1 / d theta = m2, d m2 / d theta = -m1
+        jac[k, 3] = 0.0  # the tangent does not depend on the twist angle
         jac[3 + k, 3] = val[6 + k]
         jac[6 + k, 3] = -val[3 + k]
+        for i in range(3):
+            T1ki = ws[_JT1 + 3 * k + i]
+            jac[k, i] = T1ki
+            for o in range(2):
+                jac[3 + 3 * o + k, i] = -ws[_JR + k] * ws[_JA + 3 * o + i] - ws[_JPH + o] * T1ki
+    for k in range(3):
+        tk = val[k]
+        rk = ws[_JR + k]
+        for i in range(3):
+            ti = val[i]
+            for j in range(i, 3):
+                tj = val[j]
+                T2 = (3.0 * ti * tj * tk - (ti if j == k else 0.0) - (tj if i == k else 0.0)
+                      - (tk if i == j else 0.0)) * inv2
+                hess[k, i, j] = T2
+                hess[k, j, i] = T2
+                for o in range(2):
+                    h = (rk * ws[_JS + 9 * o + 3 * i + j]
+                         - ws[_JA + 3 * o + i] * ws[_JT1 + 3 * k + j]
+                         - ws[_JA + 3 * o + j] * ws[_JT1 + 3 * k + i] - ws[_JPH + o] * T2)
+                    hess[3 + 3 * o + k, i, j] = h
+                    hess[3 + 3 * o + k, j, i] = h
+    for k in range(3):
+        hess[k, 3, 3] = 0.0
         hess[3 + k, 3, 3] = -val[3 + k]
         hess[6 + k, 3, 3] = -val[6 + k]
         for i in range(3):
-            hess[3 + k, i, 3] = jac[6 + k, i]
-            hess[3 + k, 3, i] = jac[6 + k, i]
-            hess[6 + k, i, 3] = -jac[3 + k, i]
-            hess[6 + k, 3, i] = -jac[3 + k, i]
+            hess[k, i, 3] = 0.0
+            hess[k, 3, i] = 0.0
+            v = jac[6 + k, i]
+            hess[3 + k, i, 3] = v
+            hess[3 + k, 3, i] = v
+            v = -jac[3 + k, i]
+            hess[6 + k, i, 3] = v
+            hess[6 + k, 3, i] = v

@@ -21,6 +21,7 @@ from solver.energies3d import (
     twist_terms,
 )
 from solver.frames3d import (
+    material_directors,
     material_frame_jet,
     parallel_transport,
     reference_twist,
@@ -107,6 +108,21 @@ def test_material_frame_is_orthonormal_and_transports(rng):
     np.testing.assert_allclose(m1, parallel_transport(d_src, t_src, _unit(e)), atol=1e-15)
     np.testing.assert_allclose(m2, np.cross(t, m1), atol=1e-15)
 
+
+
+def test_material_frame_at_a_twist_is_the_rotated_transported_director(rng):
+    """At any twist angle the jet's frame is the transported director turned by theta about
+    the tangent: m1 = cos(theta) d + sin(theta) t x d, m2 = t x m1."""
+    for theta in (0.3, -2.5, 4.0):
+        e = rng.normal(size=3) * 1e-2
+        t_src, d_src = _random_source(rng, e)
+        val = np.empty(9)
+        material_frame_jet(e, theta, t_src, d_src, val, np.empty((9, 4)), np.empty((9, 4, 4)))
+        t = _unit(e)
+        d = parallel_transport(d_src, t_src, t)
+        m1, m2 = material_directors(d[None], t[None], np.array([theta]))
+        np.testing.assert_allclose(val[3:6], m1[0], atol=1e-15)
+        np.testing.assert_allclose(val[6:], m2[0], atol=1e-15)
 
 def _random_pair(rng):
     z = np.empty(18)
@@ -250,17 +266,43 @@ def test_pair_kernel_in_edge_coordinates_fd_and_equal_to_chained_kernels(rng, si
             fd_check(lambda p: fun(p, src), p0, 1e-8, 2e-6)
         E, g8, h8 = fun(p0, src)
         vals, jacs, hesss = _pair_jets(p0, src)
-        z = np.empty(18)
-        pair_frames(vals[0], sa, vals[1], sb, z)
-        gz, hz, gt, ht = np.empty(18), np.empty((18, 18)), np.empty(18), np.empty((18, 18))
-        E_ref = bending_terms(z, params[0], params[1], params[3], params[4], gz, hz)
-        E_ref += twist_terms(z, params[2], params[5], gt, ht)
-        g_ref, h_ref = np.empty(8), np.empty((8, 8))
-        chain_pair(gz + gt, hz + ht, jacs[0], hesss[0], sa, jacs[1], hesss[1], sb, g_ref, h_ref)
-        assert E == pytest.approx(E_ref, rel=1e-12)
-        np.testing.assert_allclose(g8, g_ref, rtol=0, atol=1e-11 * np.max(np.abs(g_ref)))
-        np.testing.assert_allclose(h8, h_ref, rtol=0, atol=1e-11 * np.max(np.abs(h_ref)))
+        _assert_matches_chained_kernels(E, g8, h8, vals, jacs, hesss, sa, sb, params)
         np.testing.assert_array_equal(h8, h8.T)
+
+
+def _assert_matches_chained_kernels(E, g8, h8, vals, jacs, hesss, sa, sb, params):
+    """The pair kernel's energy, gradient and Hessian against the reference route: the
+    18-component kernels (`bending_terms`, `twist_terms`) carried by `chain_pair`."""
+    z = np.empty(18)
+    pair_frames(vals[0], sa, vals[1], sb, z)
+    gz, hz, gt, ht = np.empty(18), np.empty((18, 18)), np.empty(18), np.empty((18, 18))
+    E_ref = bending_terms(z, params[0], params[1], params[3], params[4], gz, hz)
+    E_ref += twist_terms(z, params[2], params[5], gt, ht)
+    g_ref, h_ref = np.empty(8), np.empty((8, 8))
+    chain_pair(gz + gt, hz + ht, jacs[0], hesss[0], sa, jacs[1], hesss[1], sb, g_ref, h_ref)
+    assert E == pytest.approx(E_ref, rel=1e-12)
+    np.testing.assert_allclose(g8, g_ref, rtol=0, atol=1e-11 * np.max(np.abs(g_ref)))
+    np.testing.assert_allclose(h8, h_ref, rtol=0, atol=1e-11 * np.max(np.abs(h_ref)))
+
+
+
+def test_pair_kernel_with_a_clamp_frame(rng):
+    """A clamp frame enters with a zero jet (`solver.assembly3d.frame_jets`): the pair
+    kernel equals the chained reference kernels and has no gradient or Hessian on it."""
+    params = (2e-3, 5e-2, 1e-3, 0.05, 0.01, 0.1)
+    ea = rng.normal(size=3) * 1e-2
+    t_src, d_src = _random_source(rng, ea)
+    vals, jacs, hesss = np.empty((2, 9)), np.zeros((2, 9, 4)), np.zeros((2, 9, 4, 4))
+    material_frame_jet(ea, 0.4, t_src, d_src, vals[0], jacs[0], hesss[0])
+    tb = _unit(ea + 3e-3 * rng.normal(size=3))
+    db = _unit(np.cross(tb, rng.normal(size=3)))
+    vals[1] = np.concatenate([tb, db, np.cross(tb, db)])
+    for sa, sb in ((1.0, 1.0), (-1.0, -1.0)):
+        g8, h8 = np.empty(8), np.empty((8, 8))
+        E = pair_terms_edges(vals[0], jacs[0], hesss[0], sa, vals[1], jacs[1], hesss[1], sb,
+                             *params, g8, h8, pair_edge_scratch())
+        _assert_matches_chained_kernels(E, g8, h8, vals, jacs, hesss, sa, sb, params)
+        assert not np.any(g8[4:]) and not np.any(h8[4:]) and not np.any(h8[:, 4:])
 
 
 def test_tip_moment_fd(rng):
