@@ -135,17 +135,25 @@ def assemble_system3d(q, n_nodes, edge_nodes, src_t, src_d, stretch_params, pair
                                 pair_edges, pair_signs, pair_params, stretch_full, stretch_red,
                                 pair_full, pair_red, dof_scale, band, grad_red, grad_full,
                                 np.empty((n_frames, 9)), np.empty((n_frames, 9, 4)),
-                                np.empty((n_frames, 9, 4, 4)))
+                                np.empty((n_frames, 9, 4, 4)), np.empty(0, dtype=np.int64))
 
 
 @njit(cache=True)
 def assemble_system3d_ws(q, n_nodes, edge_nodes, src_t, src_d, stretch_params, pair_edges,
                          pair_signs, pair_params, stretch_full, stretch_red, pair_full,
-                         pair_red, dof_scale, band, grad_red, grad_full, vals, jacs, hesss):
+                         pair_red, dof_scale, band, grad_red, grad_full, vals, jacs, hesss,
+                         heights):
     """`assemble_system3d` with the frames' jets written into the caller's ``vals``
     (n_frames, 9), ``jacs`` (n_frames, 9, 4), ``hesss`` (n_frames, 9, 4, 4): nothing is
-    allocated per element, and nothing large per call."""
-    band[:, :] = 0.0
+    allocated per element, and nothing large per call. ``heights`` (n,): the band's
+    envelope (`solver.banded.envelope_heights`; only it is cleared, the rest of the band
+    must be zero), or empty (clear the whole band)."""
+    if heights.shape[0] == band.shape[1]:
+        for j in range(band.shape[1]):
+            for k in range(heights[j] + 1):
+                band[k, j] = 0.0
+    else:
+        band[:, :] = 0.0
     grad_red[:] = 0.0
     grad_full[:] = 0.0
     energy = 0.0

@@ -26,15 +26,63 @@ def _column_height(band, j, bw, n):
     return m
 
 
+def envelope_heights(n, *element_dofs):
+    """(n,) int64: for every column j of the factor L of a matrix assembled from elements
+    with the reduced DOF lists ``element_dofs`` (arrays (n_elements, k), -1 for held DOFs),
+    the offset below the diagonal of its last entry that can be nonzero, fill included.
+
+    Fill stays inside the envelope: row i of L starts at the smallest DOF f_i sharing an
+    element with i, so column j reaches down to max{i : f_i <= j}. The factor and the solves
+    then neither scan for it nor touch the zeros below it."""
+    first = np.arange(n, dtype=np.int64)
+    for dofs in element_dofs:
+        d = np.asarray(dofs, dtype=np.int64)
+        if d.size == 0:
+            continue
+        lo = np.min(np.where(d >= 0, d, np.iinfo(np.int64).max), axis=1)
+        for c in range(d.shape[1]):
+            ok = d[:, c] >= 0
+            np.minimum.at(first, d[ok, c], lo[ok])
+    last = np.arange(n, dtype=np.int64)
+    np.maximum.at(last, first, np.arange(n, dtype=np.int64))
+    return np.maximum.accumulate(last) - np.arange(n, dtype=np.int64)
+
+
+@njit(cache=True)
+def scanned_heights(band):
+    """(n,) int64: the offset of the last nonzero below the diagonal of every column of an
+    assembled band (no fill: a bound for the factor only where fill cannot pass it)."""
+    bw = band.shape[0] - 1
+    n = band.shape[1]
+    heights = np.empty(n, dtype=np.int64)
+    for j in range(n):
+        heights[j] = _column_height(band, j, bw, n)
+    return heights
+
+
 @njit(cache=True)
 def ldlt_factor(band, pivot_tol):
     """Factorise in place; returns (status, negative_pivots, min_abs_pivot_ratio).
 
     status 0: done; 1: a pivot was below ``pivot_tol`` times the largest diagonal entry
-    (numerically singular: the caller falls back to a pivoting solver).
+    (numerically singular: the caller falls back to a pivoting solver). Each column stops
+    at its last nonzero, found by a scan when the column is reached (fill included).
     """
+    return _factor(band, np.empty(0, dtype=np.int64), pivot_tol)
+
+
+@njit(cache=True)
+def ldlt_factor_envelope(band, heights, pivot_tol):
+    """`ldlt_factor` with every column's extent given (`envelope_heights`): no scans. The
+    same operations on the same nonzeros, so the same factor (up to the sign of zeros)."""
+    return _factor(band, heights, pivot_tol)
+
+
+@njit(cache=True, inline="always")
+def _factor(band, heights, pivot_tol):
     bw = band.shape[0] - 1
     n = band.shape[1]
+    known = heights.shape[0] == n
     scale = 0.0
     for j in range(n):
         a = abs(band[0, j])
@@ -53,14 +101,17 @@ def ldlt_factor(band, pivot_tol):
             return 1, negative, min_ratio
         if d < 0.0:
             negative += 1
-        m = _column_height(band, j, bw, n)
-        # right-looking update of the trailing band with the unscaled column
+        m = heights[j] if known else _column_height(band, j, bw, n)
+        # right-looking update of the trailing band with the unscaled column; the inner
+        # loop counts from 0 so that its indices are provably non-negative: without
+        # negative-index wraparound LLVM vectorises it (2x on the 3-D unit, same bits)
         for i in range(1, m + 1):
             lij = band[i, j] / d
             if lij == 0.0:
                 continue
-            for k in range(i, m + 1):
-                band[k - i, j + i] -= band[k, j] * lij
+            c = j + i
+            for k in range(m - i + 1):
+                band[k, c] -= band[k + i, j] * lij
         for i in range(1, m + 1):
             band[i, j] /= d
     return 0, negative, min_ratio
@@ -69,22 +120,34 @@ def ldlt_factor(band, pivot_tol):
 @njit(cache=True)
 def ldlt_solve(band, b):
     """Solve K X = B in place for B of shape (n, m), with a factor from ``ldlt_factor``."""
-    bw = band.shape[0] - 1
+    return _solve(band, scanned_heights(band), b)
+
+
+@njit(cache=True)
+def ldlt_solve_envelope(band, heights, b):
+    """`ldlt_solve` with every column's extent given (`envelope_heights`)."""
+    return _solve(band, heights, b)
+
+
+@njit(cache=True, inline="always")
+def _solve(band, heights, b):
+    # all right-hand sides in one sweep over the factor: each column of L is read once
     n = band.shape[1]
-    heights = np.empty(n, dtype=np.int64)
+    nc = b.shape[1]
     for j in range(n):
-        heights[j] = _column_height(band, j, bw, n)
-    for c in range(b.shape[1]):
-        for j in range(n):
+        m = heights[j]
+        for c in range(nc):
             v = b[j, c]
             if v != 0.0:
-                m = heights[j]
-                for i in range(1, m + 1):
-                    b[j + i, c] -= band[i, j] * v
-        for j in range(n):
-            b[j, c] /= band[0, j]
-        for j in range(n - 1, -1, -1):
-            m = heights[j]
+                for k in range(m):  # from 0: vectorised (see `_factor`)
+                    b[j + 1 + k, c] -= band[k + 1, j] * v
+    for j in range(n):
+        d = band[0, j]
+        for c in range(nc):
+            b[j, c] /= d
+    for j in range(n - 1, -1, -1):
+        m = heights[j]
+        for c in range(nc):
             s = b[j, c]
             for i in range(1, m + 1):
                 s -= band[i, j] * b[j + i, c]

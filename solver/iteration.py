@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from solver.assembly import assemble_system
-from solver.banded import ldlt_factor, ldlt_solve
+from solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
 
 
 @njit(cache=True)
@@ -53,15 +53,16 @@ def _apply(q, dof_map, du):
 
 
 @njit(cache=True)
-def newton_correction(lam, P, band, grad, work, pivot_tol, tol_force):
+def newton_correction(lam, P, band, heights, grad, work, pivot_tol, tol_force):
     """The part of a Newton iteration after assembly (shared by planar and 3-D rods):
-    residual, LDL^T of ``band``, and the correction -K^-1 R into ``work[:, 1]``.
+    residual, LDL^T of ``band`` within its envelope ``heights``
+    (`solver.banded.envelope_heights`), and the correction -K^-1 R into ``work[:, 1]``.
 
     Returns (status, negative_eigenvalues, residual_max) with the statuses above (2: the
     correction is ready, nothing updated yet)."""
     R = work[:, 0]
     r_max = _residual(grad, lam, P, R)
-    status, neg, _ = ldlt_factor(band, pivot_tol)
+    status, neg, _ = ldlt_factor_envelope(band, heights, pivot_tol)
     if status != 0 or not r_max < np.inf:
         return 1, neg, r_max
     if r_max <= tol_force:
@@ -69,12 +70,12 @@ def newton_correction(lam, P, band, grad, work, pivot_tol, tol_force):
     rhs = work[:, 1:2]
     for i in range(R.shape[0]):
         rhs[i, 0] = -R[i]
-    ldlt_solve(band, rhs)
+    ldlt_solve_envelope(band, heights, rhs)
     return 2, neg, r_max
 
 
 @njit(cache=True)
-def mgdc_correction(lam, P, uP1, band, grad, work, pivot_tol, tol_force):
+def mgdc_correction(lam, P, uP1, band, heights, grad, work, pivot_tol, tol_force):
     """The part of an MGDC corrector iteration after assembly (shared by planar and 3-D
     rods): residual, LDL^T, and the correction whose load increment dl keeps it orthogonal
     to the step's first tangent ``uP1``, into ``work[:, 0]``.
@@ -82,7 +83,7 @@ def mgdc_correction(lam, P, uP1, band, grad, work, pivot_tol, tol_force):
     Returns (status, negative_eigenvalues, residual_max, dl)."""
     R = work[:, 0]
     r_max = _residual(grad, lam, P, R)
-    status, neg, _ = ldlt_factor(band, pivot_tol)
+    status, neg, _ = ldlt_factor_envelope(band, heights, pivot_tol)
     if status != 0 or not r_max < np.inf:
         return 1, neg, r_max, 0.0
     if r_max <= tol_force:
@@ -91,7 +92,7 @@ def mgdc_correction(lam, P, uP1, band, grad, work, pivot_tol, tol_force):
     for i in range(R.shape[0]):
         rhs[i, 0] = P[i]
         rhs[i, 1] = -R[i]
-    ldlt_solve(band, rhs)
+    ldlt_solve_envelope(band, heights, rhs)
     num = 0.0
     den = 0.0
     for i in range(R.shape[0]):
@@ -107,13 +108,14 @@ def mgdc_correction(lam, P, uP1, band, grad, work, pivot_tol, tol_force):
 
 
 @njit(cache=True)
-def newton_iteration(q, lam, P, elements, dofs, dof_map, band, grad, grad_full, work,
-                     pivot_tol, tol_force):
+def newton_iteration(q, lam, P, elements, dofs, dof_map, band, heights, grad, grad_full,
+                     work, pivot_tol, tol_force):
     """One Newton iteration at fixed load lam P (N). ``work`` is (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, energy)."""
     energy = assemble_system(q, elements, dofs, band, grad, grad_full)
-    status, neg, r_max = newton_correction(lam, P, band, grad, work, pivot_tol, tol_force)
+    status, neg, r_max = newton_correction(lam, P, band, heights, grad, work, pivot_tol,
+                                           tol_force)
     if status != 2:
         return status, neg, r_max, 0.0, energy
     du_max = _apply(q, dof_map, work[:, 1])
@@ -121,15 +123,15 @@ def newton_iteration(q, lam, P, elements, dofs, dof_map, band, grad, grad_full, 
 
 
 @njit(cache=True)
-def mgdc_iteration(q, lam, P, uP1, elements, dofs, dof_map, band, grad, grad_full, work,
-                   pivot_tol, tol_force):
+def mgdc_iteration(q, lam, P, uP1, elements, dofs, dof_map, band, heights, grad, grad_full,
+                   work, pivot_tol, tol_force):
     """One MGDC corrector iteration: the load increment keeps the correction orthogonal to
     the step's first tangent ``uP1``. ``work`` is (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, dlam, energy)."""
     energy = assemble_system(q, elements, dofs, band, grad, grad_full)
-    status, neg, r_max, dl = mgdc_correction(lam, P, uP1, band, grad, work, pivot_tol,
-                                             tol_force)
+    status, neg, r_max, dl = mgdc_correction(lam, P, uP1, band, heights, grad, work,
+                                             pivot_tol, tol_force)
     if status != 2:
         return status, neg, r_max, 0.0, 0.0, energy
     du_max = _apply(q, dof_map, work[:, 0])

@@ -18,12 +18,12 @@ from solver.iteration import max_abs, mgdc_correction, newton_correction
 
 
 @njit(cache=True)
-def _assemble(q, model, dof_scale, band, grad, grad_full):
+def _assemble(q, model, dof_scale, band, heights, grad, grad_full):
     (n_nodes, edge_nodes, src_t, src_d, stretch_params, pair_edges, pair_signs, pair_params,
      sf, sr, pf, pr, vals, jacs, hesss) = model
     return assemble_system3d_ws(q, n_nodes, edge_nodes, src_t, src_d, stretch_params,
                                 pair_edges, pair_signs, pair_params, sf, sr, pf, pr, dof_scale,
-                                band, grad, grad_full, vals, jacs, hesss)
+                                band, grad, grad_full, vals, jacs, hesss, heights)
 
 
 @njit(cache=True)
@@ -33,14 +33,15 @@ def _apply_scaled(q, dof_map, dof_scale, du):
 
 
 @njit(cache=True)
-def newton_iteration3d(q, lam, P, model, dof_map, dof_scale, band, grad, grad_full, work,
-                       pivot_tol, tol_force):
+def newton_iteration3d(q, lam, P, model, dof_map, dof_scale, band, heights, grad, grad_full,
+                       work, pivot_tol, tol_force):
     """One Newton iteration at fixed load lam P (N) of 3-D rods. ``model``: the tuple of
     `RodSystem3D.model_arrays`; ``work`` (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, energy)."""
-    energy = _assemble(q, model, dof_scale, band, grad, grad_full)
-    status, neg, r_max = newton_correction(lam, P, band, grad, work, pivot_tol, tol_force)
+    energy = _assemble(q, model, dof_scale, band, heights, grad, grad_full)
+    status, neg, r_max = newton_correction(lam, P, band, heights, grad, work, pivot_tol,
+                                           tol_force)
     if status != 2:
         return status, neg, r_max, 0.0, energy
     du_max = _apply_scaled(q, dof_map, dof_scale, work[:, 1])
@@ -48,15 +49,15 @@ def newton_iteration3d(q, lam, P, model, dof_map, dof_scale, band, grad, grad_fu
 
 
 @njit(cache=True)
-def mgdc_iteration3d(q, lam, P, uP1, model, dof_map, dof_scale, band, grad, grad_full, work,
-                     pivot_tol, tol_force):
+def mgdc_iteration3d(q, lam, P, uP1, model, dof_map, dof_scale, band, heights, grad,
+                     grad_full, work, pivot_tol, tol_force):
     """One MGDC corrector iteration of 3-D rods (see `solver.iteration.mgdc_correction`).
     ``work`` (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, dlam, energy)."""
-    energy = _assemble(q, model, dof_scale, band, grad, grad_full)
-    status, neg, r_max, dl = mgdc_correction(lam, P, uP1, band, grad, work, pivot_tol,
-                                             tol_force)
+    energy = _assemble(q, model, dof_scale, band, heights, grad, grad_full)
+    status, neg, r_max, dl = mgdc_correction(lam, P, uP1, band, heights, grad, work,
+                                             pivot_tol, tol_force)
     if status != 2:
         return status, neg, r_max, 0.0, 0.0, energy
     du_max = _apply_scaled(q, dof_map, dof_scale, work[:, 0])

@@ -10,7 +10,8 @@ import numpy as np
 import scipy.linalg
 
 from solver.assembly import apply_increment, assemble_system, element_dofs
-from solver.banded import band_to_dense, ldlt_factor, ldlt_solve
+from solver.banded import (band_to_dense, envelope_heights, ldlt_factor_envelope,
+                           ldlt_solve_envelope)
 from solver.iteration import mgdc_iteration, newton_iteration
 
 # A pivot smaller than this times the largest diagonal entry means K is numerically singular
@@ -36,6 +37,8 @@ class ReducedSystem:
         self.bandwidth = int(bandwidth)
         self.band = np.zeros((self.bandwidth + 1, max(self.n, 1)))
         self._band_copy = np.empty_like(self.band)
+        # the factor's envelope: its columns' extents, fill included (no scans per solve)
+        self.heights = envelope_heights(self.band.shape[1], *self.dofs)
         self.grad = np.zeros(max(self.n, 1))
         self.grad_full = np.zeros(self.dof_map.shape[0])
         self._work = np.zeros((max(self.n, 1), 3))
@@ -60,7 +63,7 @@ class ReducedSystem:
         Returns False when K is singular even for a pivoting solver.
         """
         self._band_copy[:, :] = self.band
-        status, negative, _ = ldlt_factor(self.band, PIVOT_TOL)
+        status, negative, _ = ldlt_factor_envelope(self.band, self.heights, PIVOT_TOL)
         self._dense_lu = None
         if status == 0:
             self.negative_eigenvalues = int(negative)
@@ -89,7 +92,7 @@ class ReducedSystem:
         if self._dense_lu is not None:
             out = scipy.linalg.lu_solve(self._dense_lu, b2, check_finite=False)
         else:
-            out = ldlt_solve(self.band, np.ascontiguousarray(b2))
+            out = ldlt_solve_envelope(self.band, self.heights, np.ascontiguousarray(b2))
         return out.ravel() if one else out
 
     def fused_newton(self, q, lam, P, tol_force):
@@ -98,8 +101,8 @@ class ReducedSystem:
         Returns (status, residual_max, du_max): status 0 converged (K at q factorised),
         1 LDL^T failed (nothing done: use evaluate/factor/solve), 2 q updated."""
         status, neg, r_max, du_max, energy = newton_iteration(
-            q, lam, P, self.elements, self.dofs, self.dof_map, self.band, self.grad,
-            self.grad_full, self._work, PIVOT_TOL, tol_force)
+            q, lam, P, self.elements, self.dofs, self.dof_map, self.band, self.heights,
+            self.grad, self.grad_full, self._work, PIVOT_TOL, tol_force)
         self._after_fused(status, neg, energy)
         return status, r_max, du_max
 
@@ -107,8 +110,8 @@ class ReducedSystem:
         """One fused MGDC corrector iteration; updates q. Returns (status, residual_max,
         du_max, dlam) with the statuses of `fused_newton`."""
         status, neg, r_max, du_max, dl, energy = mgdc_iteration(
-            q, lam, P, uP1, self.elements, self.dofs, self.dof_map, self.band, self.grad,
-            self.grad_full, self._work, PIVOT_TOL, tol_force)
+            q, lam, P, uP1, self.elements, self.dofs, self.dof_map, self.band, self.heights,
+            self.grad, self.grad_full, self._work, PIVOT_TOL, tol_force)
         self._after_fused(status, neg, energy)
         return status, r_max, du_max, dl
 

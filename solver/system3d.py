@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from solver.assembly3d import apply_scaled_increment, assemble_system3d_ws, element_dofs3d
+from solver.banded import envelope_heights
 from solver.frames3d import canonical_twist_offset, reference_twist, transport_frames
 from solver.iteration3d import mgdc_iteration3d, newton_iteration3d
 from solver.system import PIVOT_TOL, ReducedSystem
@@ -50,6 +51,10 @@ class RodSystem3D(ReducedSystem):
         self.bandwidth = int(bandwidth)
         self.band = np.zeros((self.bandwidth + 1, max(self.n, 1)), order="F")
         self._band_copy = np.empty_like(self.band)
+        # the factor's envelope (fill included): assembly clears, the factor and the solves
+        # walk only that part of the band (the rest stays zero)
+        self.heights = envelope_heights(self.band.shape[1], self.element_dofs[1],
+                                        self.element_dofs[3])
         self.grad = np.zeros(max(self.n, 1))
         self.grad_full = np.zeros(self.dof_map.shape[0])
         self._work = np.zeros((max(self.n, 1), 3))
@@ -73,7 +78,7 @@ class RodSystem3D(ReducedSystem):
         self.energy = assemble_system3d_ws(
             np.ascontiguousarray(q, dtype=float), m[0], m[1], m[2], m[3], m[4], m[5], m[6],
             m[7], m[8], m[9], m[10], m[11], self.dof_scale, self.band, self.grad,
-            self.grad_full, m[12], m[13], m[14])
+            self.grad_full, m[12], m[13], m[14], self.heights)
         return self.energy
 
     def reduced(self, q):
@@ -97,8 +102,8 @@ class RodSystem3D(ReducedSystem):
         Returns (status, residual_max, du_max): status 0 converged (K at q factorised),
         1 LDL^T failed (nothing done: use evaluate/factor/solve), 2 q updated."""
         status, neg, r_max, du_max, energy = newton_iteration3d(
-            q, lam, P, self.model_arrays, self.dof_map, self.dof_scale, self.band, self.grad,
-            self.grad_full, self._work, PIVOT_TOL, tol_force)
+            q, lam, P, self.model_arrays, self.dof_map, self.dof_scale, self.band, self.heights,
+            self.grad, self.grad_full, self._work, PIVOT_TOL, tol_force)
         self._after_fused(status, neg, energy)
         return status, r_max, du_max
 
@@ -107,7 +112,7 @@ class RodSystem3D(ReducedSystem):
         du_max, dlam) with the statuses of `fused_newton`."""
         status, neg, r_max, du_max, dl, energy = mgdc_iteration3d(
             q, lam, P, uP1, self.model_arrays, self.dof_map, self.dof_scale, self.band,
-            self.grad, self.grad_full, self._work, PIVOT_TOL, tol_force)
+            self.heights, self.grad, self.grad_full, self._work, PIVOT_TOL, tol_force)
         self._after_fused(status, neg, energy)
         return status, r_max, du_max, dl
 
