@@ -27,6 +27,16 @@ from solver.stability import held_count
 # very stiff stretching terms cannot drop below round-off, positions can).
 TOL_DISP = 1e-11
 
+# The MGDC corrector has also converged when the next correction, estimated from the last
+# two (du_k^2 / du_(k-1): quadratic convergence), falls below the displacement tolerance
+# while the last one is within this factor of it: an iteration that would only confirm
+# digits already there is skipped (`_settled`). Step control still counts it (`_counted`),
+# so a path keeps the steps it had: its sampling, and the branches its steps can reach, do
+# not change. Not for Newton at a held displacement (`_newton`): there the force is read
+# off the reaction, which the stiff stretching terms make sensitive to the last digits of
+# the positions (a skipped iteration leaves it off by ~1e-10 relative).
+SETTLE_FACTOR = 1e3
+
 # A step across which the stability count changes while the path keeps its direction is
 # retried smaller down to this fraction of the first step: a bifurcation persists however
 # small the step, a fold of the path that a long step jumped over does not.
@@ -355,6 +365,23 @@ class _Recorder:
 
 
 # ---------------------------------------------------------------------- Newton
+def _settled(du_max, du_prev, tol_disp):
+    """Has Newton converged on the displacements? The last correction (``du_max``) is below
+    ``tol_disp``, or it is within SETTLE_FACTOR of it and the next one, estimated as
+    du_max^2 / du_prev, is below it (quadratic convergence: that correction would change
+    no digit that matters)."""
+    return du_max <= tol_disp or (du_max <= SETTLE_FACTOR * tol_disp
+                                  and du_max * du_max <= tol_disp * du_prev)
+
+
+def _counted(it, settled, du_max, tol_disp, r_max, tol_force):
+    """The iterations a converged Newton reports to step control: ``it``, plus the one
+    skipped when it stopped on the estimate of `_settled` alone (neither the last correction
+    ``du_max`` nor the residual ``r_max`` was below its tolerance yet)."""
+    early = settled and not du_max <= tol_disp and not r_max <= tol_force
+    return it + 1 if early else it
+
+
 def _newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move):
     """Newton at fixed load ``lam P``; q is updated in place.
 
@@ -756,15 +783,17 @@ def follow_mgdc(
             lam_try = lam + dlam
             system.increment(q_try, uP1, dlam)
             fmax = max(fscale, abs(lam_try) * unit)
-            du_max = np.inf
+            du_max = du_prev = np.inf
             for it in range(1, max_iter + 1):
+                settled = _settled(du_max, du_prev, tol_disp)
                 fstat, r_max, du_step, dl = system.fused_mgdc(
-                    q_try, lam_try, P, uP1, tol * fmax if du_max > tol_disp else np.inf)
+                    q_try, lam_try, P, uP1, np.inf if settled else tol * fmax)
                 if fstat == 0:
                     converged = True
+                    it = _counted(it, settled, du_max, tol_disp, r_max, tol * fmax)
                     break
                 if fstat == 2:
-                    du_max = du_step
+                    du_max, du_prev = du_step, du_max
                     lam_try += dl
                     total_iterations += 1
                     continue
@@ -774,8 +803,9 @@ def follow_mgdc(
                 if not np.all(np.isfinite(R)) or not system.factor():
                     break
                 r_max = float(np.max(np.abs(R)))
-                if r_max <= tol * fmax or du_max <= tol_disp:
+                if r_max <= tol * fmax or settled:
                     converged = True
+                    it = _counted(it, settled, du_max, tol_disp, r_max, tol * fmax)
                     break
                 both = system.solve(np.stack([P, -R], axis=1))
                 uPj, uRj = both[:, 0], both[:, 1]
@@ -786,7 +816,7 @@ def follow_mgdc(
                 du = dl * uPj + uRj
                 if not np.all(np.isfinite(du)):
                     break
-                du_max = float(np.max(np.abs(du)))
+                du_max, du_prev = float(np.max(np.abs(du))), du_max
                 system.increment(q_try, du)
                 lam_try += dl
                 total_iterations += 1

@@ -15,32 +15,48 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse
 import scipy.sparse.csgraph
+from numba import njit
 
 #: at most this many peripheral start nodes are tried (spread over the candidates)
 MAX_STARTS = 8
 
 
+@njit(cache=True)
 def cuthill_mckee(indptr, indices, degree, start, n):
     """Cuthill–McKee order of the connected component of ``start`` (neighbours by increasing
-    degree, then index), followed by the other components from their lowest node."""
-    seen = np.zeros(n, dtype=bool)
-    order = []
-    for root in [start] + list(range(n)):
+    degree, then index: ``indices`` sorted within each row), followed by the other
+    components from their lowest node."""
+    seen = np.zeros(n, dtype=np.bool_)
+    order = np.empty(n, dtype=np.int64)
+    count = 0
+    for r in range(-1, n):
+        root = start if r < 0 else r
         if seen[root]:
             continue
         seen[root] = True
-        level = len(order)
-        order.append(root)
-        while level < len(order):
+        level = count
+        order[count] = root
+        count += 1
+        while level < count:
             v = order[level]
             level += 1
-            nb = indices[indptr[v]:indptr[v + 1]]
-            nb = nb[~seen[nb]]
-            if nb.size:
-                nb = nb[np.lexsort((nb, degree[nb]))]
-                seen[nb] = True
-                order.extend(nb.tolist())
-    return np.asarray(order, dtype=np.int64)
+            lo = indptr[v]
+            m = 0
+            nb = np.empty(indptr[v + 1] - lo, dtype=np.int64)
+            for k in range(lo, indptr[v + 1]):
+                u = indices[k]
+                if not seen[u]:
+                    nb[m] = u
+                    m += 1
+            if m:
+                nb = nb[:m]
+                # stable: equal degrees keep the row's increasing index order
+                nb = nb[np.argsort(degree[nb], kind="mergesort")]
+                for u in nb:
+                    seen[u] = True
+                    order[count] = u
+                    count += 1
+    return order
 
 
 def envelope_cost(order, indptr, indices, sizes):
@@ -104,6 +120,7 @@ def envelope_order(graph, sizes):
     if n <= 2:
         return np.arange(n, dtype=np.int64)
     indptr, indices = g.indptr, g.indices.astype(np.int64)
+    indptr = indptr.astype(np.int64)
     degree = np.diff(indptr)
     candidates = _peripheral_nodes(g)
     if len(candidates) > MAX_STARTS:

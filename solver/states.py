@@ -73,10 +73,12 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
     [d[i-1], d[i+1]] with displacement-controlled solves. Returns (F_max, d_max), and leaves
 the full state at d_max in ``probe.last_state``.
 
-    Each solve starts from the nearest path sample, not from an earlier solve: with the
-    node held, the force maximum is close to a bifurcation of the held structure (an
-    asymmetric mode; docs/path-following.md), where K is nearly singular and a Newton
-    started there takes a wild first step."""
+    Each solve starts from the path's own states, interpolated to the solve's d by the
+    parabola through the three samples (the state is a smooth function of d on the branch,
+    so the guess is off by O(spacing^3)), not from an earlier solve: with the node held,
+    the force maximum is close to a bifurcation of the held structure (an asymmetric mode;
+    docs/path-following.md), where K is nearly singular and a Newton started there takes a
+    wild first step."""
     a, b = float(d[i - 1]), float(d[i + 1])
     if not a < b:
         raise ConvergenceError("the path is not monotone in d around the maximum")
@@ -87,12 +89,12 @@ the full state at d_max in ``probe.last_state``.
     # samples' line than twice their own variation has jumped to another equilibrium (its
     # force can be 50 % off), and the search is abandoned (the caller falls back)
     spread = float(np.max(np.abs(np.diff(Fs)))) + 1e-9 * float(np.max(np.abs(Fs)))
+    samples = [np.asarray(positions[j], dtype=float) for j in range(i - 1, i + 2)]
 
     def f(x):
         x = float(x)
         if x not in cache:
-            j = i - 1 + int(np.argmin(np.abs(ds - x)))
-            Fx = probe.solve(positions[j], x)[1]
+            Fx = probe.solve(_on_parabola(ds, samples, x), x)[1]
             if not abs(Fx - float(np.interp(x, ds, Fs))) <= 2.0 * spread:
                 raise ConvergenceError(
                     f"the solve at d = {x:.6g} m left the path's branch (F = {Fx:.6g} N against "
@@ -107,6 +109,15 @@ the full state at d_max in ``probe.last_state``.
     F_max = f(x)
     probe.last_state = states[x]  # the state at the maximum, for the caller
     return F_max, x
+
+
+def _on_parabola(ds, values, x):
+    """The Lagrange parabola through (ds[k], values[k]), k = 0, 1, 2, at x (any shape)."""
+    d0, d1, d2 = (float(v) for v in ds)
+    w0 = (x - d1) * (x - d2) / ((d0 - d1) * (d0 - d2))
+    w1 = (x - d0) * (x - d2) / ((d1 - d0) * (d1 - d2))
+    w2 = (x - d0) * (x - d1) / ((d2 - d0) * (d2 - d1))
+    return w0 * values[0] + w1 * values[1] + w2 * values[2]
 
 
 def zero_force_displacement(probe, d0, d1, pos0, pos1, F0, F1, tol_F, max_steps=40):
