@@ -5,8 +5,12 @@ constrained system (`system`), the model builder (`structure`) and the path foll
 (`continuation`) live apart; `unit` builds the paper's bistable unit on top.
 """
 
-from solver.continuation import ConvergenceError, Path
-from solver.structure import Rod, Structure
-from solver.structure3d import Rod3D, Structure3D
+from solver.kernel_cache import discard_stale_kernels
+
+discard_stale_kernels()  # before any cached kernel is loaded (see solver.kernel_cache)
+
+from solver.continuation import ConvergenceError, Path  # noqa: E402
+from solver.structure import Rod, Structure  # noqa: E402
+from solver.structure3d import Rod3D, Structure3D  # noqa: E402
 
 __all__ = ["Structure", "Rod", "Path", "ConvergenceError", "Structure3D", "Rod3D"]
