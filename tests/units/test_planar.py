@@ -7,6 +7,7 @@ import time
 import numpy as np
 import pytest
 
+from unit_checks import make_second_state_unstable
 from units import UnitGeometry, simulate_unit
 from units.geometry import build_unit
 from units.planar import STATUS_CODES, _zero_crossings
@@ -155,17 +156,8 @@ def test_an_unstable_second_state_is_reported_as_such(monkeypatch):
     eigenvalues, so the reporting is checked by making the stability check of state (iii)
     see two: the unit must then be "second state unstable", not bistable, with no S or θ."""
     import units.planar as planar
-    from solver.stability import StateStability
 
-    real = planar._state_stability
-    calls = []
-
-    def second_unstable(st, model, positions, system):
-        calls.append(1)
-        s = real(st, model, positions, system)
-        return StateStability(2, 2) if len(calls) == 2 else s  # (ii) real, (iii) unstable
-
-    monkeypatch.setattr(planar, "_state_stability", second_unstable)
+    make_second_state_unstable(monkeypatch, planar)
     r = simulate_unit(UnitGeometry(**PAPER), critical=False, check_self_standing=False)
     assert r.status.startswith("second state unstable"), r.status
     assert r.status_code == STATUS_CODES["second_state_unstable"] == 5

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from unit_checks import assert_supports_hold_only_rigid_motion, make_second_state_unstable
 from units.frame3d import UnitGeometry, end_tangent_angle
 from units.planar import simulate_unit
 from units.unit3d import (
@@ -487,17 +488,7 @@ def test_released_model_shares_the_rods_and_its_supports_hold_only_rigid_motion(
     assert kept == [r.name for r in free.mesh.rods]
     n = free.mesh.n_nodes
     assert np.array_equal(act.mesh.positions[:n], free.mesh.positions)
-    # statically determinate: six held components, independent on the rigid-body motions
-    X = free.mesh.positions
-    rows = []
-    for node, comps in released_supports(free):
-        for c in comps:
-            k = "xyz".index(c)
-            row = np.zeros(6)
-            row[k] = 1.0
-            row[3:] = np.cross(X[node], np.eye(3)[k])  # e_k . (omega x p) = omega . (p x e_k)
-            rows.append(row)
-    assert len(rows) == 6 and np.linalg.matrix_rank(np.array(rows)) == 6
+    assert_supports_hold_only_rigid_motion(free.mesh.positions, released_supports(free))
 
 
 def test_perfect_unit_released_state(perfect21):
@@ -588,19 +579,10 @@ def test_an_unstable_second_state_is_reported_as_such(monkeypatch):
     """No 3-D geometry found keeps a state (iii) with negative eigenvalues, so the report is
     checked by making the stability check of (iii) see two (the planar unit's test)."""
     _solver()
-    from solver.stability import StateStability
     from units import push3d
     from units.unit3d import simulate_unit_3d
 
-    real = push3d._state_stability
-    calls = []
-
-    def second_unstable(st, q, node, system):
-        calls.append(1)
-        s = real(st, q, node, system)
-        return StateStability(2, 2) if len(calls) == 2 else s  # (ii) real, (iii) unstable
-
-    monkeypatch.setattr(push3d, "_state_stability", second_unstable)
+    make_second_state_unstable(monkeypatch, push3d)
     r = simulate_unit_3d(SPECIMEN, nodes=21)
     assert r.status.startswith("second state unstable") and "negative eigenvalue" in r.reason
     assert not r.bistable and math.isnan(r.S) and math.isnan(r.theta_deg)
