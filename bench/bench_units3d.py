@@ -37,36 +37,29 @@ def main():
     from units.unit2d import simulate_unit_2d
     from units.unit3d import simulate_unit_3d
 
-    for h in (0.02, 0.04):
-        g = UnitGeometry(L=0.1, h=h, t=0.5e-3, w=5e-3, b=5e-3)
-        med, best, r = _median(lambda: simulate_unit_3d(g, check_self_standing=False))
-        print(f"3-D unit (L=100, h={h * 1e3:.0f}, t=0.5, w=b=5 mm), default mesh ({r.n_nodes} "
-              f"nodes), d = 0 to state (iii) solved: median {med:.3f} s (best {best:.3f} s; "
-              f"target <= 0.5 s); status {r.status}, {len(r.curve[0])} path steps")
-        med, best, r = _median(lambda: simulate_unit_3d(g))
+    def report(label, simulate, target):
+        """The push to (iii), then the same with the release and its stability check."""
+        med, best, r = _median(lambda: simulate(check_self_standing=False))
+        print(f"{label}, default mesh ({r.n_nodes} nodes), d = 0 to state (iii) solved: median "
+              f"{med:.3f} s (best {best:.3f} s; target <= {target:g} s); status {r.status}, "
+              f"{len(r.curve[0])} path steps")
+        med, best, r = _median(lambda: simulate())
         print(f"  ... and the released state with its stability check: median {med:.3f} s "
               f"(best {best:.3f} s)")
+
+    for h in (0.02, 0.04):
+        g = UnitGeometry(L=0.1, h=h, t=0.5e-3, w=5e-3, b=5e-3)
+        report(f"3-D unit (L=100, h={h * 1e3:.0f}, t=0.5, w=b=5 mm)",
+               lambda g=g, **kw: simulate_unit_3d(g, **kw), 0.5)
     g2 = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
-    med, best, r = _median(lambda: simulate_unit_2d(g2, check_self_standing=False))
-    print(f"2-D unit (L=100, h=40, t=0.5, w=5 mm), default mesh ({r.n_nodes} nodes), d = 0 to "
-          f"state (iii) solved: median {med:.3f} s (best {best:.3f} s; target <= 2 s); "
-          f"status {r.status}, {len(r.curve[0])} path steps")
-    med, best, r = _median(lambda: simulate_unit_2d(g2))
-    print(f"  ... and the released state with its stability check: median {med:.3f} s "
-          f"(best {best:.3f} s)")
+    report("2-D unit (L=100, h=40, t=0.5, w=5 mm)", lambda **kw: simulate_unit_2d(g2, **kw), 2)
+
 
 def _best_us(fn, rounds=30, repeats=20):
-    """Best round's time per call (us): the least disturbed round on a shared machine."""
-    import time
-
-    fn()
-    best = float("inf")
-    for _ in range(rounds):
-        t0 = time.perf_counter()
-        for _ in range(repeats):
-            fn()
-        best = min(best, (time.perf_counter() - t0) / repeats)
-    return best * 1e6
+    """Best round's time per call (us) of ``rounds`` rounds of ``repeats`` calls: the least
+    disturbed round on a shared machine."""
+    _, best, _ = median_time(lambda: [fn() for _ in range(repeats)], rounds, warm=True)
+    return best / repeats * 1e6
 
 
 def iteration_breakdown():
