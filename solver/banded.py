@@ -43,9 +43,18 @@ def envelope_heights(n, *element_dofs):
         for c in range(d.shape[1]):
             ok = d[:, c] >= 0
             np.minimum.at(first, d[ok, c], lo[ok])
-    last = np.arange(n, dtype=np.int64)
-    np.maximum.at(last, first, np.arange(n, dtype=np.int64))
-    return np.maximum.accumulate(last) - np.arange(n, dtype=np.int64)
+    return profile_heights(first)
+
+
+def profile_heights(first):
+    """(n,) int64: the extent below the diagonal of every column of the factor of a matrix
+    whose row i starts at column ``first[i]`` (<= i): column j reaches down to the last row
+    i with first[i] <= j (fill stays inside this envelope)."""
+    first = np.asarray(first, dtype=np.int64)
+    rows = np.arange(first.shape[0], dtype=np.int64)
+    last = rows.copy()
+    np.maximum.at(last, first, rows)
+    return np.maximum.accumulate(last) - rows
 
 
 @njit(cache=True)

@@ -10,7 +10,6 @@ as the general path measures it.
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
 from solver.assembly3d import apply_scaled_increment, assemble_system3d_ws

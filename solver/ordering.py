@@ -17,6 +17,8 @@ import scipy.sparse
 import scipy.sparse.csgraph
 from numba import njit
 
+from solver.banded import profile_heights
+
 #: at most this many peripheral start nodes are tried (spread over the candidates)
 MAX_STARTS = 8
 
@@ -68,7 +70,6 @@ def envelope_cost(order, indptr, indices, sizes):
     pos = np.empty(n, dtype=np.int64)
     pos[order] = np.arange(n)
     start = np.concatenate([[0], np.cumsum(sizes[order])])
-    n_dof = int(start[-1])
     # first DOF reached by each group's row: its own start or its earliest neighbour's
     first_pos = pos.copy()
     counts = np.diff(indptr)
@@ -78,12 +79,8 @@ def envelope_cost(order, indptr, indices, sizes):
         mins = np.minimum.reduceat(nb_pos, indptr[:-1][has])
         first_pos[has] = np.minimum(first_pos[has], mins)
     first = start[first_pos]
-    # every DOF of a group shares the group's first column; last row reaching column j
-    row_first = np.repeat(first[order], sizes[order])
-    reach = np.full(n_dof, -1, dtype=np.int64)
-    np.maximum.at(reach, row_first, np.arange(n_dof))
-    last = np.maximum.accumulate(reach)
-    h = (last - np.arange(n_dof)).astype(float)
+    # every DOF of a group shares the group's first column
+    h = profile_heights(np.repeat(first[order], sizes[order])).astype(float)
     return float(0.5 * np.dot(h, h))
 
 

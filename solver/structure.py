@@ -549,7 +549,6 @@ class Structure:
         turns its forces, energies and stiffnesses into N, J and N/m. The path followers use
         it: paths then do not depend on E at all, bit for bit.
         """
-        n = self._n_total
         if self.n_nodes == 0:
             raise ValueError("the structure has no rods")
         rep = self.supernodes()

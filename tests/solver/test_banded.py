@@ -72,3 +72,37 @@ def test_envelope_factor_matches_dense_and_the_full_band_loop(rng, order):
         L[idx + k, idx] = ref_band[k, : n - k]
     D = np.diag(ref_band[0])
     np.testing.assert_allclose(L @ D @ L.T, ref, atol=1e-12 * np.abs(ref).max())
+
+
+def test_envelope_heights_bound_the_fill_and_give_the_scanned_factor(rng):
+    """Column extents computed once from the elements' DOFs (`envelope_heights`) hold every
+    nonzero of the factor, fill included, and the factor and solves that use them equal the
+    scanning ones; held DOFs (-1) are skipped."""
+    from solver.banded import (envelope_heights, ldlt_factor_envelope, ldlt_solve_envelope,
+                               scanned_heights)
+
+    n = 40
+    elements = rng.integers(0, n, size=(25, 3))
+    elements[:, 1] = np.minimum(elements[:, 0] + rng.integers(0, 6, 25), n - 1)
+    elements[3, 2] = -1
+    chain = np.stack([np.arange(n - 1), np.arange(1, n)], axis=1)
+    heights = envelope_heights(n, elements, chain)
+    bw = int(heights.max())
+    band = np.zeros((bw + 1, n), order="F")
+    band[0] = 1.0 + 4.0 * rng.random(n)
+    for dofs in (elements, chain):
+        for e in dofs:
+            e = e[e >= 0]
+            for a in e:
+                for b in e:
+                    if a > b:
+                        band[a - b, b] += 0.3 * rng.normal()
+    scanned = band.copy(order="F")
+    enveloped = band.copy(order="F")
+    assert ldlt_factor(scanned, 1e-14)[:2] == ldlt_factor_envelope(enveloped, heights, 1e-14)[:2]
+    np.testing.assert_array_equal(scanned, enveloped)
+    assert np.all(scanned_heights(scanned) <= heights)
+    assert np.any(scanned_heights(scanned) > scanned_heights(band))  # there was fill
+    b = rng.normal(size=(n, 2))
+    np.testing.assert_array_equal(ldlt_solve(scanned, b.copy()),
+                                  ldlt_solve_envelope(enveloped, heights, b.copy()))
