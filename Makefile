@@ -22,7 +22,7 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)  ## create .venv and install the project (done automatically by every target)
 
 test: $(STAMP)  ## run the whole test suite (slow tests included)
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q --durations=15
 
 test-fast: $(STAMP)  ## run the tests not marked slow
 	$(PY) -m pytest -q -m "not slow"
@@ -40,7 +40,7 @@ check-maps: $(STAMP)  ## recompute the CI grid and compare it with the committed
 	$(PY) -m snapmorph maps check --grid ci --against maps/data/ci.nc
 
 maps-accuracy: $(STAMP)  ## interpolated map values against direct simulation at random off-grid points
-	$(PY) -m pipeline.accuracy --map maps/data/default.nc --n 50
+	$(PY) -m snapmorph.pipeline.accuracy --map maps/data/default.nc --n 50
 
 figures: $(STAMP)  ## write the paper's figures into figures/ with a gallery page figures/index.md
 	$(PY) -m snapmorph figures --out figures

@@ -34,10 +34,10 @@ def meander(n_half: int = 5, R: float = 0.12):
 
 def main():
     warnings.simplefilter("ignore")
-    from design import inverse_design
-    from design.inverse import verify_design
-    from design.lookup import load_map
-    from design.targets import example_targets
+    from snapmorph.design import inverse_design
+    from snapmorph.design.inverse import verify_design
+    from snapmorph.design.lookup import load_map
+    from snapmorph.design.targets import example_targets
 
     dm = load_map()
     pts = meander()

@@ -32,9 +32,9 @@ def main() -> None:
     import numpy as np
     import xarray as xr
 
-    from pipeline.build import build_map
-    from pipeline.checkpoint import checkpoint_dir
-    from pipeline.grid import preset
+    from snapmorph.pipeline.build import build_map
+    from snapmorph.pipeline.checkpoint import checkpoint_dir
+    from snapmorph.pipeline.grid import preset
 
     grid = preset("ci")
     with tempfile.TemporaryDirectory(prefix="snapmorph-bench-") as tmp:

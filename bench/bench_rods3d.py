@@ -31,7 +31,7 @@ L, T, W, E, NU = 0.1, 0.5e-3, 10e-3, 2.2e9, 0.38
 
 
 def ltb_structure(n=101):
-    from solver import Structure3D
+    from snapmorph.solver import Structure3D
 
     x = np.linspace(0.0, L, n)
     st = Structure3D()
@@ -84,7 +84,7 @@ def per_iteration(sys3, q3, sys2, q2, rounds=25):
 
 
 def main():
-    from solver import Structure
+    from snapmorph.solver import Structure
 
     st, rod = ltb_structure()
     sysm = st.reduced_system()

@@ -43,7 +43,7 @@ def alternate(fa, fb, runs=RUNS):
 
 
 def unit_case(g, label):
-    from solver.unit import simulate_unit
+    from snapmorph.units import simulate_unit
 
     with_checks = lambda: simulate_unit(g)  # noqa: E731
     bare = lambda: simulate_unit(g, critical=False)  # noqa: E731
@@ -59,7 +59,7 @@ def bifurcation_cases():
     """Paths that do meet bifurcations: what locating and switching cost."""
     import numpy as np
 
-    from solver import Structure
+    from snapmorph.solver import Structure
     from tests.solver.test_column import column
 
     def free_arch():
@@ -96,7 +96,7 @@ def bifurcation_cases():
 
 
 def main():
-    from solver.unit import UnitGeometry
+    from snapmorph.units import UnitGeometry
 
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"stability checks: median of {RUNS} interleaved warm runs, one thread, "

@@ -14,14 +14,14 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 def s_units():
-    from design import Unit
+    from snapmorph.design import Unit
 
     return [Unit(L=0.1067, h=0.0258, t=0.5e-3, w=5e-3, side=s) for s in (1,) * 4 + (-1,) * 4]
 
 
 def main():
-    from design.tolerance import tolerance
-    from maps import DesignMap
+    from snapmorph.design.tolerance import tolerance
+    from snapmorph.maps import DesignMap
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

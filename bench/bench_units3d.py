@@ -29,13 +29,13 @@ def _median(fn, runs=RUNS):
 
 def main():
     try:
-        from solver import Structure3D  # noqa: F401
+        from snapmorph.solver import Structure3D  # noqa: F401
     except ImportError:
         print("3-D unit / 2-D unit: solver.Structure3D is not available; nothing measured")
         return
-    from units.frame3d import UnitGeometry
-    from units.unit2d import simulate_unit_2d
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.unit2d import simulate_unit_2d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     def report(label, simulate, target):
         """The push to (iii), then the same with the release and its stability check."""
@@ -68,10 +68,10 @@ def iteration_breakdown():
     30 rounds of 20 calls, at a perturbed stress-free state)."""
     import numpy as np
 
-    from solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
-    from solver.system import PIVOT_TOL
-    from units.frame3d import UnitGeometry
-    from units.unit3d import build_unit_3d
+    from snapmorph.solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
+    from snapmorph.solver.system import PIVOT_TOL
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.unit3d import build_unit_3d
 
     for h in (0.02, 0.04):
         st = build_unit_3d(UnitGeometry(L=0.1, h=h, t=0.5e-3, w=5e-3, b=5e-3)).structure

@@ -1,6 +1,6 @@
 """Benchmark cases, importable by the benchmark driver and by tests."""
 
-from solver.reference_models import clamped_arch
+from snapmorph.solver.reference_models import clamped_arch
 
 
 def clamped_arch_push():
@@ -11,7 +11,7 @@ def clamped_arch_push():
 
 
 def specimen_unit(**kw):
-    from solver.unit import UnitGeometry, simulate_unit
+    from snapmorph.units import UnitGeometry, simulate_unit
 
     return simulate_unit(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3), **kw)
 
@@ -20,7 +20,7 @@ def cantilever_push(n_nodes):
     """A cantilever of ``n_nodes`` nodes pushed at its tip to PL^2/EI = 10 (scaling study)."""
     import numpy as np
 
-    from solver import Structure
+    from snapmorph.solver import Structure
 
     ds = 1.0 / (n_nodes - 1.5)
     s = -0.5 * ds + ds * np.arange(n_nodes)

@@ -1,6 +1,6 @@
 """Forward kinematics, inverse design and fabrication drawings of arrays of bistable units.
 
-    from design import Unit, forward_kinematics, inverse_design
+    from snapmorph.design import Unit, forward_kinematics, inverse_design
     u = Unit(L=0.1, h=0.02, t=0.5e-3, w=5e-3, side=+1)          # SI units
     xy = forward_kinematics([u, u, u], snapped=[False, True, False])
     d = inverse_design(points_xy, t=0.5e-3, w=5e-3, tol=0.01, verify=True)   # any planar curve
@@ -9,14 +9,19 @@
 Unit shapes come from the design maps (`maps.DesignMap`) unless `source="simulate"`.
 """
 
-from design.biarcs import Arc, biarc, biarcs
-from design.inverse import Design, inverse_design, verify_design
-from design.kinematics import all_states, chain, forward_kinematics, parse_state
-from design.lookup import MapLookup
-from design.target_io import read_target
-from design.targets import Target
-from design.units import Unit, read_units_csv, spacer, write_units_csv
-from design.tolerance import tolerance  # noqa: E402  (the function: design.tolerance(units, ...))
+if __name__ != "snapmorph.design":  # imported under its pre-0.2 top-level name `design`
+    from _snapmorph_legacy import alias_old_name  # warns, then hands out snapmorph.design
+
+    alias_old_name(__name__)
+
+from snapmorph.design.biarcs import Arc, biarc, biarcs
+from snapmorph.design.inverse import Design, inverse_design, verify_design
+from snapmorph.design.kinematics import all_states, chain, forward_kinematics, parse_state
+from snapmorph.design.lookup import MapLookup
+from snapmorph.design.target_io import read_target
+from snapmorph.design.targets import Target
+from snapmorph.design.units import Unit, read_units_csv, spacer, write_units_csv
+from snapmorph.design.tolerance import tolerance  # noqa: E402  (the function: design.tolerance(units, ...))
 
 __all__ = [
     "Arc",

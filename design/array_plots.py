@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from design.plots import _plt, _save
+from snapmorph.design.plots import _plt, _save
 
 # Okabe-Ito colours, safe for colour-vision deficiencies (as snapmorph.plotting.arrays).
 _BLUE, _ORANGE, _GREY = "#0072B2", "#E69F00", "#999999"

@@ -1,6 +1,6 @@
 """Every state of an array simulated whole, against forward kinematics (issue 6).
 
-    from design.array_study import paper_three_units, run_study
+    from snapmorph.design.array_study import paper_three_units, run_study
     study = run_study(paper_three_units(), name="three units")
     print(study.table())
 
@@ -30,9 +30,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from design.arrays import (PETG_E, ArrayResult, _turn_deg, build_array, rigid_residual,
+from snapmorph.design.arrays import (PETG_E, ArrayResult, _turn_deg, build_array, rigid_residual,
                            simulate_array)
-from design.units import Unit
+from snapmorph.design.units import Unit
 
 __all__ = ["ArrayStudy", "all_array_states", "curve_deviation", "fk_released",
            "paper_three_units", "released_shapes", "run_study", "shape_change", "table3_M_units"]
@@ -65,7 +65,7 @@ def table3_M_units(b_over_L: float = 0.0) -> list:
 def curve_deviation(a, b, length: float, n: int = 2000) -> float:
     """Largest distance between polylines a and b (m), both ways, over ``length`` (m): n points
     spread evenly along each are measured against the other polyline."""
-    from design.targets import distances_to_polyline, resample
+    from snapmorph.design.targets import distances_to_polyline, resample
 
     da = distances_to_polyline(resample(np.asarray(a, float), n), np.asarray(b, float))
     db = distances_to_polyline(resample(np.asarray(b, float), n), np.asarray(a, float))
@@ -76,7 +76,7 @@ def released_shapes(units, nodes=None, E: float = PETG_E, coincident_ties: bool 
     """{unit index: (UnitShape of the released state iii, SnapRecord)} for every arched unit,
     from one-unit arrays (one simulation per distinct unit). Raises ValueError when a unit does
     not stay snapped alone."""
-    from design.shapes import UnitShape
+    from snapmorph.design.shapes import UnitShape
 
     cache, out = {}, {}
     for i, u in enumerate(units):
@@ -95,8 +95,8 @@ def released_shapes(units, nodes=None, E: float = PETG_E, coincident_ties: bool 
 def fk_released(units, snapped, shapes) -> np.ndarray:
     """Concatenation (K, 2) m of straight unsnapped units and the released shapes of the
     snapped ones (`released_shapes`), from (0, 0) heading +x."""
-    from design.kinematics import place
-    from design.shapes import straight
+    from snapmorph.design.kinematics import place
+    from snapmorph.design.shapes import straight
 
     return place([shapes[i][0] if s else straight(u.L)
                   for i, (u, s) in enumerate(zip(units, snapped))]).xy
@@ -241,8 +241,8 @@ def run_study(units, name: str = "array", nodes=None, E: float = PETG_E, orders=
     ``fk=False`` skips forward kinematics (NaN deviations); ``source``: "simulate" (each unit
     by `simulate_unit` at the array's resolution) or "map" (``design_map``, default map);
     ``state``: "released" (default) or "actuated" single units."""
-    from design.kinematics import chain
-    from design.lookup import MapLookup
+    from snapmorph.design.kinematics import chain
+    from snapmorph.design.lookup import MapLookup
 
     units = list(units)
     t_all = time.perf_counter()

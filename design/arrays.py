@@ -1,7 +1,7 @@
 """Whole-array simulation: one DER model of n units, snapped one at a time (issue 6).
 
-    from design import Unit
-    from design.arrays import simulate_array
+    from snapmorph.design import Unit
+    from snapmorph.design.arrays import simulate_array
     u = Unit(L=0.1, h=0.02, t=0.5e-3, w=5e-3, side=+1, b=5e-3)
     r = simulate_array([u, u, u], snapped="101", order=[2, 0])
     r.status, r.base            # "ok", (K, 2) m from (0, 0) heading +x
@@ -50,8 +50,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from design.kinematics import parse_state
-from design.units import Unit
+from snapmorph.design.kinematics import parse_state
+from snapmorph.design.units import Unit
 
 __all__ = ["ArrayModel", "ArrayResult", "SnapRecord", "build_array", "simulate_array",
            "snap_unit", "release", "rigid_residual"]
@@ -112,7 +112,7 @@ class ArrayModel:
         ``actuator``'s single-unit test constraints instead (rollers in z at its support nodes,
         rigid joint, apex held in x, and in z too when ``apex_z`` — the displacement-controlled
         push)."""
-        from solver import Structure
+        from snapmorph.solver import Structure
 
         st = Structure()
         for idx, width, thickness in self.rods:
@@ -132,7 +132,7 @@ class ArrayModel:
 
 
 def _unit_geometry(u: Unit, E: float, i: int):
-    from solver.unit_model import UnitGeometry
+    from snapmorph.units.geometry import UnitGeometry
 
     try:
         return UnitGeometry(L=u.L, h=u.h, t=u.t, w=u.w, b=u.b, E=E)
@@ -156,7 +156,7 @@ def build_array(units, nodes: int | None = None, E: float = PETG_E,
     True (default) that arch node is put on the base (the bonded arch edge straddling x0 is then
     flat, its direction the sinusoid's zero slope at x0), which makes every bond rotation
     invariant; False keeps `build_unit`'s mesh exactly."""
-    from solver.unit_model import DEFAULT_NODES, build_unit
+    from snapmorph.units.geometry import DEFAULT_NODES, build_unit
 
     units = list(units)
     if not units:
@@ -419,7 +419,7 @@ class _Newton:
 
     def solve(self, positions, max_move):
         """(positions (n, 2), iterations, negative eigenvalues); ConvergenceError on failure."""
-        from solver import ConvergenceError
+        from snapmorph.solver import ConvergenceError
 
         sysm = self.system
         q = np.array(positions, dtype=float).reshape(-1)
@@ -455,7 +455,7 @@ def snap_unit(model: ArrayModel, positions, i: int, steps: int = 20,
     halved when Newton fails (down to ``min_step`` h), grown by 1.5 after an easy step (up to
     4 h/steps), until the actuator force has crossed zero twice or the apex moved
     ``max_distance`` h. Returns (positions after the release, clamp frame; SnapRecord)."""
-    from solver import ConvergenceError
+    from snapmorph.solver import ConvergenceError
 
     t0 = time.perf_counter()
     u, m = model.units[i], model.meshes[i]
@@ -557,7 +557,7 @@ def snap_unit(model: ArrayModel, positions, i: int, steps: int = 20,
 def _zero_force_state(newton, states, d, F, k, joint, z0, push_dir, h, max_steps=40):
     """A state near F = 0 between path samples k-1 and k (F changes sign there): regula falsi
     (Illinois) on the apex displacement, each trial a displacement-controlled solve."""
-    from solver import ConvergenceError
+    from snapmorph.solver import ConvergenceError
 
     a, b = float(d[k - 1]), float(d[k])
     Fa, Fb = float(F[k - 1]), float(F[k])

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from design.units import Unit
+from snapmorph.design.units import Unit
 
 LAYERS = ("CUT", "ENGRAVE", "MARKS")
 DEFAULT_COLOURS = {"CUT": 1, "ENGRAVE": 5, "MARKS": 3}  # red, blue, green (ACI)

@@ -25,12 +25,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from design.biarcs import Arc, biarcs, sample_arcs
-from design.kinematics import chain
-from design.lookup import MapLookup
-from design.targets import (Target, arc_length, best_rigid_placement, check_points, deviation,
+from snapmorph.design.biarcs import Arc, biarcs, sample_arcs
+from snapmorph.design.kinematics import chain
+from snapmorph.design.lookup import MapLookup
+from snapmorph.design.targets import (Target, arc_length, best_rigid_placement, check_points, deviation,
                             deviation_vector, place_rigid, resample, self_intersects)
-from design.units import Unit
+from snapmorph.design.units import Unit
 
 
 @dataclass
@@ -117,8 +117,8 @@ class Design:
         False) the DXF/SVG drawings into out_dir; returns the paths."""
         from pathlib import Path
 
-        from design.plots import plot_design
-        from design.units import write_units_csv
+        from snapmorph.design.plots import plot_design
+        from snapmorph.design.units import write_units_csv
 
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
@@ -136,7 +136,7 @@ class Design:
         (out / "design.txt").write_text(self.summary() + "\n")
         paths.append(out / "design.txt")
         if drawings:
-            from design.drawings import write_drawings
+            from snapmorph.design.drawings import write_drawings
 
             paths += write_drawings(self.units, out, bed_length_mm=bed_length_mm, colours=colours)
         return paths
@@ -272,7 +272,7 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     if isinstance(points, (str, bytes)) or hasattr(points, "__fspath__"):
         from pathlib import Path
 
-        from design.target_io import read_target
+        from snapmorph.design.target_io import read_target
 
         drawn = Path(points).suffix.lower() in (".svg", ".dxf")
         points, file_tangents = read_target(points)
@@ -349,14 +349,14 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
                       UserWarning, stacklevel=2)
     if plot is not None:
         tick("plot")
-        from design.plots import plot_design
+        from snapmorph.design.plots import plot_design
 
         plot_design(design, plot)
     return design
 
 
 def _default_dm():
-    from design.lookup import default_map
+    from snapmorph.design.lookup import default_map
 
     return default_map()
 
@@ -422,7 +422,7 @@ def _choice(name, value, allowed):
 
 
 def _finite_control_points(points):
-    from design.targets import _finite_points
+    from snapmorph.design.targets import _finite_points
 
     return check_points(_finite_points(points, "control points"), 2, "control points")
 
@@ -770,8 +770,8 @@ class _StateMap:
 def _chain_fast(units, dm, state_kw, start=(0.0, 0.0), angle: float = 0.0):
     """`design.kinematics.chain` of the all-snapped units, its shapes from one vectorised map
     lookup (the same numbers: conformed map shape, scaled, mirrored, placed)."""
-    from design.kinematics import place
-    from design.shapes import UnitShape, straight
+    from snapmorph.design.kinematics import place
+    from snapmorph.design.shapes import UnitShape, straight
 
     arched = [i for i, u in enumerate(units) if not u.is_spacer]
     t, w = units[0].t, units[0].w
@@ -1254,7 +1254,7 @@ def verify_design(design: Design, nodes: int | None = None) -> dict:
     says), "deviations": {"best": (max, rms), "clamped": (max, rms)}, "placements": ...}."""
     import time
 
-    from design.arrays import simulate_array
+    from snapmorph.design.arrays import simulate_array
 
     t0 = time.perf_counter()
     r = simulate_array(design.units, None, nodes=nodes)

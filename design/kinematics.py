@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from design.lookup import MapLookup, check_state
-from design.shapes import UnitShape, unit_shape
-from design.units import Unit
+from snapmorph.design.lookup import MapLookup, check_state
+from snapmorph.design.shapes import UnitShape, unit_shape
+from snapmorph.design.units import Unit
 
 
 @dataclass(frozen=True)

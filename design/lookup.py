@@ -27,7 +27,7 @@ def default_map():
     """The committed default design map, loaded once (`maps.DesignMap.load()`)."""
     if "map" not in _DEFAULT:
         try:
-            from maps import DesignMap
+            from snapmorph.maps import DesignMap
         except ImportError as exc:  # maps/ not built yet
             raise ValueError(f"no design map available (maps.DesignMap: {exc})") from None
         try:
@@ -46,7 +46,7 @@ def load_map(path=None):
     if not Path(path).is_file():
         raise ValueError(f"design map not found: {path}")
     try:
-        from maps import DesignMap
+        from snapmorph.maps import DesignMap
     except ImportError as exc:
         raise ValueError(f"cannot read design maps (maps.DesignMap: {exc})") from None
     try:

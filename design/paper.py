@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from design.inverse import inverse_design
-from design.kinematics import all_states
-from design.lookup import MapLookup, load_map
-from design.units import Unit
+from snapmorph.design.inverse import inverse_design
+from snapmorph.design.kinematics import all_states
+from snapmorph.design.lookup import MapLookup, load_map
+from snapmorph.design.units import Unit
 
 T, W = 0.5e-3, 5e-3
 
@@ -156,9 +156,9 @@ def compare_S(d, design_map=None) -> str:
 def write_figures(out, design_map=None) -> list[Path]:
     """The paper's Section 3-4 figures into `out`: fk_states.png, inverse_M.png, inverse_S.png
     (with the M's and S's units.csv and drawings under out/inverse_M/, out/inverse_S/)."""
-    from design.drawings import write_drawings
-    from design.plots import plot_design, plot_states
-    from design.units import write_units_csv
+    from snapmorph.design.drawings import write_drawings
+    from snapmorph.design.plots import plot_design, plot_states
+    from snapmorph.design.units import write_units_csv
 
     out = Path(out)
     dm = design_map if design_map is not None else load_map()
@@ -189,7 +189,7 @@ def design_S_paper(design_map=None, **shape):
 def conventions(design_map=None, verify: bool = True) -> dict:
     """{"paper": design, "ours": design} of the paper's S, by the paper's convention (theta_end,
     Table 3) and by ours (θ, tolerance-driven), each simulated as a whole array when verify."""
-    from design.inverse import verify_design
+    from snapmorph.design.inverse import verify_design
 
     dm = design_map if design_map is not None else load_map()
     pts, ang = s_control_points()
@@ -223,7 +223,7 @@ def conventions_table(designs: dict) -> str:
 def plot_conventions(designs: dict, path) -> Path:
     """Side by side: the S designed by the paper's convention and by ours; target, predicted
     (map) and simulated whole array for each."""
-    from design.plots import _plt, _save
+    from snapmorph.design.plots import _plt, _save
 
     plt = _plt()
     fig, axes = plt.subplots(1, len(designs), figsize=(6 * len(designs), 6), squeeze=False)

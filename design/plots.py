@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from design.biarcs import sample_arcs
-from design.drawings import arch_profile
+from snapmorph.design.biarcs import sample_arcs
+from snapmorph.design.drawings import arch_profile
 
 
 def _plt():

@@ -20,8 +20,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from design.lookup import MapLookup, check_state
-from design.units import Unit
+from snapmorph.design.lookup import MapLookup, check_state
+from snapmorph.design.units import Unit
 
 SOURCES = ("map", "simulate")
 E_DEFAULT = 2.2e9  # Pa, PETG (only the simulation needs it: the shape does not depend on E)
@@ -106,7 +106,7 @@ def normalise_base(xy: np.ndarray, theta_deg: float, L: float) -> np.ndarray:
 def _simulated(L, h, t, w, b, E, nodes, state="released"):
     """Direct simulation of one unit: (normalised base shape, θ in degrees) of ``state``."""
     try:
-        from solver.unit import UnitGeometry, simulate_unit
+        from snapmorph.units import UnitGeometry, simulate_unit
     except ImportError as exc:
         raise ValueError(f"source='simulate' needs solver.unit ({exc})") from None
     result = simulate_unit(UnitGeometry(L=L, h=h, t=t, w=w, b=b, E=E), nodes=nodes,

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from design.targets import read_target_csv
+from snapmorph.design.targets import read_target_csv
 
 #: samples per SVG curve segment / DXF bulge arc
 CURVE_SAMPLES = 48

@@ -1,6 +1,6 @@
 """Fabrication tolerance: Monte Carlo of hand-made units through the design map.
 
-    from design.tolerance import tolerance
+    from snapmorph.design.tolerance import tolerance
     r = tolerance(units, sigma={"h": 0.5e-3, "L": 0.3e-3, "t": 0.02e-3}, n=1000, seed=0)
     r.envelope_contains(xy), r.free_end_summary(), r.p_bistable
 
@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from design.units import Unit
+from snapmorph.design.units import Unit
 
 SIGMA_DEFAULT = {"h": 0.5e-3, "L": 0.3e-3, "t": 0.02e-3}
 SIGMA_KEYS = ("L", "h", "t", "w")
@@ -189,7 +189,7 @@ def _draw(units, sigma, n, rng):
 def _fk_samples(dm, units, draws, state, stations):
     """Forward kinematics of every sample: (station points (n, u, m, 2), ends (n, 2), end
     angles (n,) rad, bistable (n, u) bool, inside map (n,) bool)."""
-    from design.shapes import conform  # noqa: F401  (the same similarity, vectorised below)
+    from snapmorph.design.shapes import conform  # noqa: F401  (the same similarity, vectorised below)
 
     L, h, t, w = draws["L"], draws["h"], draws["t"], draws["w"]
     n, nu = L.shape
@@ -295,7 +295,7 @@ def tolerance(units, sigma=None, n: int = 1000, seed: int = 0, design_map=None,
     `maps.DesignMap` (default map); ``state``: "released" (default) or "actuated";
     ``stations``: envelope points per unit; ``held_out``: also measure the envelope's
     coverage of a second, independent set of n samples (`held_out_coverage`)."""
-    from design.lookup import check_state, load_map
+    from snapmorph.design.lookup import check_state, load_map
 
     units = _check_units(units)
     sigma = check_sigma(sigma)

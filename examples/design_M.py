@@ -15,8 +15,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from design.lookup import load_map
-from design.paper import compare_M, design_M
+from snapmorph.design.lookup import load_map
+from snapmorph.design.paper import compare_M, design_M
 
 
 def run(design_map=None, controls: str = "paper", refine: bool = False, out=None):

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import argparse
 
-from design.lookup import load_map
-from design.paper import compare_S, design_S
+from snapmorph.design.lookup import load_map
+from snapmorph.design.paper import compare_S, design_S
 
 
 def run(design_map=None, out=None):

@@ -13,8 +13,8 @@ import argparse
 import math
 from pathlib import Path
 
-from design.lookup import load_map
-from design.paper import three_units
+from snapmorph.design.lookup import load_map
+from snapmorph.design.paper import three_units
 
 
 def run(design_map=None, source: str = "map", out=None) -> dict:
@@ -22,7 +22,7 @@ def run(design_map=None, source: str = "map", out=None) -> dict:
     of all states into out/states.png when `out` is given."""
     states = three_units(design_map, source)
     if out is not None:
-        from design.plots import plot_states
+        from snapmorph.design.plots import plot_states
 
         plot_states({k: c.xy for k, c in states.items()}, Path(out) / "states.png",
                     title=f"three units t = 0.5, h = 20, w = 5, L = 100 mm ({source})")

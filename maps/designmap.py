@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.schema import (
+from snapmorph.pipeline.schema import (
     BISTABLE_ONLY, FLAG_VARS, GRID_DIMS, OPTIONAL_VARS, READABLE_VERSIONS, RELEASED_VARS,
     REQUIRED_ATTRS, REQUIRED_VARS, REQUIRED_VARS_V1, SCHEMA_VERSION, STATES, STATUS_CODES,
 )

@@ -1,6 +1,6 @@
 """The design-map pipeline: grids, the point solver, and the dask-driven, checkpointed build.
 
-    from pipeline import preset, build_map
+    from snapmorph.pipeline import preset, build_map
     build_map(preset("ci"), "maps/data/ci.nc")
 
 `build_map`, `BuildReport`, `solve_point` and the point-solver registry (`SolverSpec`,
@@ -8,15 +8,20 @@
 package stays cheap (no dask, xarray or solver at import time).
 """
 
-from pipeline.grid import Grid, PRESETS, preset
-from pipeline.schema import SCHEMA_VERSION
+if __name__ != "snapmorph.pipeline":  # imported under its pre-0.2 top-level name `pipeline`
+    from _snapmorph_legacy import alias_old_name  # warns, then hands out snapmorph.pipeline
+
+    alias_old_name(__name__)
+
+from snapmorph.pipeline.grid import Grid, PRESETS, preset
+from snapmorph.pipeline.schema import SCHEMA_VERSION
 
 __all__ = ["Grid", "PRESETS", "preset", "SCHEMA_VERSION", "build_map", "BuildReport", "solve_point",
            "SolverSpec", "MapGrid", "get_spec", "register"]
 
-_LAZY = {"build_map": "pipeline.build", "BuildReport": "pipeline.build", "solve_point": "pipeline.point",
-         "SolverSpec": "pipeline.solvers", "MapGrid": "pipeline.solvers", "get_spec": "pipeline.solvers",
-         "register": "pipeline.solvers"}
+_LAZY = {"build_map": "snapmorph.pipeline.build", "BuildReport": "snapmorph.pipeline.build", "solve_point": "snapmorph.pipeline.point",
+         "SolverSpec": "snapmorph.pipeline.solvers", "MapGrid": "snapmorph.pipeline.solvers", "get_spec": "snapmorph.pipeline.solvers",
+         "register": "snapmorph.pipeline.solvers"}
 
 
 def __getattr__(name):

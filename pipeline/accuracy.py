@@ -1,6 +1,6 @@
 """Measure a map's interpolation accuracy against direct simulation at random off-grid points.
 
-    python -m pipeline.accuracy --map maps/data/default.nc --n 50
+    python -m snapmorph.pipeline.accuracy --map maps/data/default.nc --n 50
 
 Points are drawn uniformly in the map's (h/L, t/L, w/L) box and kept when they are "away from
 the bistability boundary": every grid point of their interpolation cell, and of the cells one
@@ -69,7 +69,7 @@ def check_nodes(dm, solve, resolution, b, k: int = 3, seed: int = 1, rtol: float
 def measure(dm, n: int = 50, seed: int = 0, solve=None, max_tries: int = 100000) -> Accuracy:
     """Compare `dm` with direct simulations at n random off-grid points away from the boundary
     (after checking that the map still reproduces the solver at a few grid points)."""
-    from pipeline.point import solve_point
+    from snapmorph.pipeline.point import solve_point
 
     solve = solve or solve_point
     rng = np.random.default_rng(seed)
@@ -99,12 +99,12 @@ def measure(dm, n: int = 50, seed: int = 0, solve=None, max_tries: int = 100000)
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m pipeline.accuracy", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(prog="python -m snapmorph.pipeline.accuracy", description=__doc__.splitlines()[0])
     p.add_argument("--map", default=None, help="map file (default: the default map)")
     p.add_argument("--n", type=int, default=50, help="number of points (default 50)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     args = p.parse_args(argv)
-    from maps import DesignMap
+    from snapmorph.maps import DesignMap
 
     dm = DesignMap.load(args.map)
     print(f"{dm}")

@@ -15,15 +15,15 @@ import time
 
 import numpy as np
 
-from pipeline.schema import FLAG_VARS, FLOAT_VARS, PENDING
-from pipeline.solvers import resolve
+from snapmorph.pipeline.schema import FLAG_VARS, FLOAT_VARS, PENDING
+from snapmorph.pipeline.solvers import resolve
 
 INT_VARS = (*FLAG_VARS, "status")
 BLOCK_KEYS = ("index", *FLOAT_VARS, *INT_VARS, "base_shape", "solve_time", "message")
 
 
 def _unit():
-    from pipeline.solvers import get_spec
+    from snapmorph.pipeline.solvers import get_spec
 
     return get_spec("unit")
 

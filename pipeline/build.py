@@ -1,7 +1,7 @@
 """Build a design map: fan a point solver out over a dask.distributed cluster, checkpoint every
 finished batch, resume after any interruption, and write the map's netCDF file.
 
-    from pipeline import build_map, preset
+    from snapmorph.pipeline import build_map, preset
     report = build_map(preset("ci"), "maps/data/ci.nc")          # LocalCluster, one worker/core
     report = build_map(grid, out, scheduler="tcp://host:8786")    # an existing cluster
     report = build_map(spec.preset("small"), out, kind="unit2d")  # any registered point solver
@@ -26,15 +26,15 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.batch import (merge, new_block, put, resolve_solver, solve_points, solver_name,
+from snapmorph.pipeline.batch import (merge, new_block, put, resolve_solver, solve_points, solver_name,
                             timeout_record, check_block)
-from pipeline.checkpoint import Checkpoint, checkpoint_dir
-from pipeline.fingerprint import (build_inputs, canonical, differences, fingerprint, solver_modules,
+from snapmorph.pipeline.checkpoint import Checkpoint, checkpoint_dir
+from snapmorph.pipeline.fingerprint import (build_inputs, canonical, differences, fingerprint, solver_modules,
                                   source_hash, source_provenance)
-from pipeline.grid import Grid
-from pipeline.point import solve_point, warm_up
-from pipeline.schema import PENDING
-from pipeline.solvers import get_spec
+from snapmorph.pipeline.grid import Grid
+from snapmorph.pipeline.point import solve_point, warm_up
+from snapmorph.pipeline.schema import PENDING
+from snapmorph.pipeline.solvers import get_spec
 
 _DEFAULT = object()
 MAX_BATCH = 20  # points per task: a few seconds of work, well above dask's ~2 ms per task
@@ -121,7 +121,7 @@ class BuildReport:
 
 
 def _unit_status_names() -> dict:
-    from pipeline.schema import STATUS_CODES
+    from snapmorph.pipeline.schema import STATUS_CODES
 
     return dict(STATUS_CODES)
 
@@ -319,7 +319,7 @@ def open_checkpoint(out, grid, solve=solve_point, restart: bool = False, *, kind
     """The checkpoint of a build of `grid` into `out` (created, or resumed), recording the
     build's inputs and fingerprint, and the provenance of the model source. identity: the
     build's (spec, options, inputs, fingerprint) if already computed."""
-    from pipeline.dataset import package_version
+    from snapmorph.pipeline.dataset import package_version
 
     spec, options, inputs, fp = identity or build_identity(grid, solve, kind)
     prov = {**source_provenance(solver_modules(spec, resolve_solver(solve if solve is not None else spec.solve))),
@@ -454,7 +454,7 @@ def _report(out, spec, grid, status, total, t_start, up_to_date=False, fingerpri
 def _write_and_verify(spec, grid, options, inputs, fp, meta, total, coords, out, keep_solve_time):
     """Validate the assembled results, write the map atomically, read it back and check it
     before the caller deletes the checkpoint."""
-    from pipeline.solvers import resolve
+    from snapmorph.pipeline.solvers import resolve
 
     try:
         check_block(total, spec, options, coords)
@@ -487,7 +487,7 @@ def _write_and_verify(spec, grid, options, inputs, fp, meta, total, coords, out,
 def _verify_written(spec, out, ds, fp) -> None:
     import xarray as xr
 
-    from pipeline.solvers import resolve
+    from snapmorph.pipeline.solvers import resolve
 
     with xr.open_dataset(out, engine="netcdf4") as back:
         back = back.load()

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.batch import check_block
-from pipeline.fingerprint import block_checksum, differences
+from snapmorph.pipeline.batch import check_block
+from snapmorph.pipeline.fingerprint import block_checksum, differences
 
 META = "build.json"
 
@@ -113,7 +113,7 @@ class Checkpoint:
         existing one was made for other inputs, or if another build holds it.
         """
         if inputs is None or fingerprint is None or spec is None:
-            from pipeline.build import build_identity
+            from snapmorph.pipeline.build import build_identity
 
             spec, _, inputs, fingerprint = build_identity(grid, solver, spec)
         d = checkpoint_dir(out)

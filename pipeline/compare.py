@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pipeline.schema import COMPARED_VARS, GRID_DIMS, STATUS_CODES
+from snapmorph.pipeline.schema import COMPARED_VARS, GRID_DIMS, STATUS_CODES
 
 #: global attributes that must agree (the others record when/where a map was built)
 COMPARED_ATTRS = ("schema_version", "b_over_L", "resolution")

@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from pipeline.batch import INT_VARS
-from pipeline.grid import Grid
-from pipeline.point import E_REF, L_REF, model_options
-from pipeline.schema import (
+from snapmorph.pipeline.batch import INT_VARS
+from snapmorph.pipeline.grid import Grid
+from snapmorph.pipeline.point import E_REF, L_REF, model_options
+from snapmorph.pipeline.schema import (
     COORD_ATTRS, FLAG_VARS, FLOAT_VARS, GRID_DIMS, NORMALISATION, SCHEMA_VERSION, SHAPE_ATTRS,
     SHAPE_VARS, SOLVE_TIME_ATTRS, STATUS_ATTRS,
 )

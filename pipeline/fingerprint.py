@@ -38,7 +38,8 @@ def _module_files(name: str) -> list[tuple[str, Path]]:
         root = Path(list(spec.submodule_search_locations)[0]).resolve()
         files = sorted(p for p in root.rglob("*.py") if "__pycache__" not in p.parts)
         return [(str(Path(root.name, p.relative_to(root)).as_posix()), p) for p in files]
-    return [("/".join([*name.split(".")[:-1], origin.name]), origin)]
+    # named as in the repository (snapmorph.units.planar -> units/planar.py)
+    return [("/".join([*name.removeprefix("snapmorph.").split(".")[:-1], origin.name]), origin)]
 
 
 def source_files(modules) -> list[tuple[str, Path]]:

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.schema import DEFAULT_SAMPLES
+from snapmorph.pipeline.schema import DEFAULT_SAMPLES
 
 # Valid ranges: (low, high, low inclusive, high inclusive). The arch needs room between its
 # flat ends, 2 (b + w) < L, which is checked jointly below.

@@ -2,7 +2,7 @@
 
 A point solver has the signature
     solve(h_over_L, t_over_L, w_over_L, b_over_L, resolution, samples) -> record (dict)
-with the keys of `empty_record`. `solve_point` is the real one (it calls `solver.unit`); tests
+with the keys of `empty_record`. `solve_point` is the real one (it calls `snapmorph.units.planar`); tests
 inject fakes. `finalise_record` enforces the schema's rules on any solver's output, so that one
 odd point can never break a build.
 """
@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from pipeline.schema import (
+from snapmorph.pipeline.schema import (
     BISTABLE_ONLY, DEFAULT_SAMPLES, FAILED, FLAG_VARS, FLOAT_VARS, MONOSTABLE, NOT_BISTABLE,
     INVALID_GEOMETRY, NOT_CONVERGED, OK, OPTIONAL_VARS, RELEASED_VARS, SHAPE_VARS, STATUS_CODES,
 )
@@ -31,7 +31,7 @@ BOND_LENGTH = "b+w"
 def _joint_length(L: float) -> float:
     """The maps' joint (m) for base length L: exactly `UnitGeometry`'s default 1/8 in at the
     reference L = 0.1 m (so that a map point and a default `simulate_unit` are identical)."""
-    from units.geometry import JOINT_LENGTH_DEFAULT
+    from snapmorph.units.geometry import JOINT_LENGTH_DEFAULT
 
     return JOINT_LENGTH_DEFAULT if L == L_REF else JOINT_LENGTH_OVER_L * L
 
@@ -83,7 +83,7 @@ def _flag(value) -> int:
 
 
 def normalise_result(r, samples: int = DEFAULT_SAMPLES) -> dict:
-    """Turn a `solver.unit.UnitResult` (SI) into a schema record (dimensionless)."""
+    """Turn a `snapmorph.units.UnitResult` (SI) into a schema record (dimensionless)."""
     g = r.geometry
     L = g.L
     EI = g.E * g.w * g.t**3 / 12.0  # E I_arch (N m^2)
@@ -119,6 +119,14 @@ def normalise_result(r, samples: int = DEFAULT_SAMPLES) -> dict:
     return rec
 
 
+def unit_model():
+    """The planar unit model (`snapmorph.units.planar`: UnitGeometry, simulate_unit,
+    DEFAULT_NODES), looked up in ``sys.modules`` at call time so that tests can stand in."""
+    import importlib
+
+    return importlib.import_module("snapmorph.units.planar")
+
+
 def solve_point(h_over_L, t_over_L, w_over_L, b_over_L=0.0, resolution=None,
                 samples: int = DEFAULT_SAMPLES, time_limit=None) -> dict:
     """Simulate one unit (L = 0.1 m, E = 2.2 GPa, the maps' joint and bond) and return its
@@ -130,9 +138,10 @@ def solve_point(h_over_L, t_over_L, w_over_L, b_over_L=0.0, resolution=None,
     why.
     """
     try:
-        from solver.unit import UnitGeometry, simulate_unit
+        model = unit_model()
+        UnitGeometry, simulate_unit = model.UnitGeometry, model.simulate_unit
     except Exception as exc:  # the solver itself is broken: record, do not stop
-        return empty_record(samples, NOT_CONVERGED, f"cannot import solver.unit: {exc!r}")
+        return empty_record(samples, NOT_CONVERGED, f"cannot import the unit model: {exc!r}")
     L = L_REF
     try:
         g = UnitGeometry(L=L, h=h_over_L * L, t=t_over_L * L, w=w_over_L * L, b=b_over_L * L,
@@ -152,10 +161,10 @@ def solve_point(h_over_L, t_over_L, w_over_L, b_over_L=0.0, resolution=None,
 
 
 def default_resolution():
-    """The solver's converged default resolution (`solver.unit.DEFAULT_NODES`), or None if the
+    """The solver's converged default resolution (`snapmorph.units.planar.DEFAULT_NODES`), or None if the
     solver does not say (or cannot be imported)."""
     try:
-        from solver import unit
+        unit = unit_model()
     except Exception:
         return None
     n = getattr(unit, "DEFAULT_NODES", None)
@@ -170,8 +179,7 @@ def warm_up(resolution=None) -> float:
     """
     import time
 
-    from solver import unit
-
+    unit = unit_model()
     t0 = time.perf_counter()
     hook = getattr(unit, "warm_up", None)
     if callable(hook):

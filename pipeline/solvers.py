@@ -6,7 +6,7 @@ extra dimensions), its status codes and which of them are failures, its model op
 grid presets, and the source code whose content determines its results (hashed into the
 build's fingerprint, see `pipeline.fingerprint`).
 
-    from pipeline.solvers import get_spec
+    from snapmorph.pipeline.solvers import get_spec
     spec = get_spec("unit")            # the planar unit (the default); "unit2d" once registered
     grid = spec.preset("ci")
 
@@ -37,8 +37,8 @@ PENDING = -1
 #: built-in kinds looked up lazily: name -> "module:ATTRIBUTE" of a SolverSpec (or a function
 #: returning one)
 KNOWN = {
-    "unit": "pipeline.solvers:unit_spec",
-    "unit2d": "units.unit2d:MAP_SPEC",
+    "unit": "snapmorph.pipeline.solvers:unit_spec",
+    "unit2d": "snapmorph.units.unit2d:MAP_SPEC",
 }
 _REGISTRY: dict = {}
 
@@ -341,13 +341,13 @@ _UNIT_REQUIRED = ("F_cr", "d_cr", "d_unstable", "d_second", "S", "theta", "energ
 
 def unit_spec() -> SolverSpec:
     """The planar arch-on-base unit over (h/L, t/L, w/L), written by `pipeline.dataset`."""
-    from pipeline import schema
-    from pipeline.grid import PRESETS
+    from snapmorph.pipeline import schema
+    from snapmorph.pipeline.grid import PRESETS
 
     codes = {k: v for k, v in schema.STATUS_CODES.items() if k != PENDING}
     return SolverSpec(
         name="unit",
-        solve="pipeline.point:solve_point",
+        solve="snapmorph.pipeline.point:solve_point",
         dims=tuple(schema.GRID_DIMS),
         float_vars=dict(schema.FLOAT_VARS),
         flag_vars=dict(schema.FLAG_VARS),
@@ -360,44 +360,44 @@ def unit_spec() -> SolverSpec:
         failure_statuses=tuple(n for n in ("not_converged", "timeout", "invalid_geometry") if n in codes.values()),
         options={"b_over_L": 0.0, "resolution": None, "samples": schema.DEFAULT_SAMPLES},
         presets=dict(PRESETS),
-        warm="pipeline.solvers:_unit_warm",
+        warm="snapmorph.pipeline.solvers:_unit_warm",
         # the rod solver, the planar unit model (units/ also holds the 2-D and 3-D units, which
         # do not change this map), the normalisation, and the writer (it decides the bytes)
-        sources=("solver", "units.__init__", "units.geometry", "units.planar", "pipeline.point",
-                 "pipeline.schema", "pipeline.dataset"),
+        sources=("snapmorph.solver", "snapmorph.units.__init__", "snapmorph.units.geometry", "snapmorph.units.planar", "snapmorph.pipeline.point",
+                 "snapmorph.pipeline.schema", "snapmorph.pipeline.dataset"),
         schema_version=int(schema.SCHEMA_VERSION),
         title="snapmorph design map of the bistable arch-on-base unit",
         call="positional",
-        finalise="pipeline.solvers:_unit_finalise",
-        empty="pipeline.solvers:_unit_empty",
-        resolve_options="pipeline.solvers:_unit_resolve_options",
-        assemble="pipeline.solvers:_unit_assemble",
-        write="pipeline.dataset:write_netcdf",
-        validate_file="pipeline.solvers:_unit_validate_file",
+        finalise="snapmorph.pipeline.solvers:_unit_finalise",
+        empty="snapmorph.pipeline.solvers:_unit_empty",
+        resolve_options="snapmorph.pipeline.solvers:_unit_resolve_options",
+        assemble="snapmorph.pipeline.solvers:_unit_assemble",
+        write="snapmorph.pipeline.dataset:write_netcdf",
+        validate_file="snapmorph.pipeline.solvers:_unit_validate_file",
     )
 
 
 def _unit_finalise(rec, options):
-    from pipeline.point import finalise_record
+    from snapmorph.pipeline.point import finalise_record
 
     return finalise_record(rec, options["samples"])
 
 
 def _unit_empty(options, status, message=""):
-    from pipeline.point import empty_record
+    from snapmorph.pipeline.point import empty_record
 
     return empty_record(options["samples"], status, message)
 
 
 def _unit_resolve_options(options):
-    from pipeline.point import default_resolution
+    from snapmorph.pipeline.point import default_resolution
 
     opts = dict(options)
     if opts.get("resolution") is None:
         opts["resolution"] = default_resolution()
     else:
         try:
-            from units.geometry import check_nodes
+            from snapmorph.units.geometry import check_nodes
         except ImportError:  # an older solver without the check: its own errors per point
             return opts
         try:
@@ -408,13 +408,13 @@ def _unit_resolve_options(options):
 
 
 def _unit_warm(options):
-    from pipeline.point import warm_up
+    from snapmorph.pipeline.point import warm_up
 
     return warm_up(options.get("resolution"))
 
 
 def _unit_assemble(grid, total, attrs, spec):
-    from pipeline.dataset import assemble, global_attrs
+    from snapmorph.pipeline.dataset import assemble, global_attrs
 
     prov = {k: attrs[k] for k in ("created", "package_version", "git_commit")}
     prov["resolution"] = attrs["model_options"]["resolution"]
@@ -423,6 +423,6 @@ def _unit_assemble(grid, total, attrs, spec):
 
 
 def _unit_validate_file(path):
-    from maps.designmap import DesignMap
+    from snapmorph.maps.designmap import DesignMap
 
     DesignMap.load(path)

@@ -5,8 +5,8 @@ import os
 
 
 def make(out, args=None):
-    from design.array_plots import plot_study
-    from design.array_study import paper_three_units, run_study, table3_M_units
+    from snapmorph.design.array_plots import plot_study
+    from snapmorph.design.array_study import paper_three_units, run_study, table3_M_units
 
     paths, tables, failed = [], [], []
     for units, name, stem in (

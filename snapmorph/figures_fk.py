@@ -5,11 +5,11 @@ from pathlib import Path
 
 
 def make(out, args=None):
-    from design.drawings import write_drawings
-    from design.lookup import load_map
-    from design.paper import design_M, design_S, three_units
-    from design.plots import plot_design
-    from design.units import write_units_csv
+    from snapmorph.design.drawings import write_drawings
+    from snapmorph.design.lookup import load_map
+    from snapmorph.design.paper import design_M, design_S, three_units
+    from snapmorph.design.plots import plot_design
+    from snapmorph.design.units import write_units_csv
     from snapmorph.plotting.arrays import plot_fk_states
 
     dm = load_map(getattr(args, "map", None) if args is not None else None)

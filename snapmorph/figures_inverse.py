@@ -6,8 +6,8 @@ figures themselves are written with the forward-kinematics ones."""
 def make(out, args=None):
     from pathlib import Path
 
-    from design.lookup import load_map
-    from design.paper import conventions, conventions_table, plot_conventions
+    from snapmorph.design.lookup import load_map
+    from snapmorph.design.paper import conventions, conventions_table, plot_conventions
 
     dm = load_map(getattr(args, "map", None) if args is not None else None)
     designs = conventions(dm)

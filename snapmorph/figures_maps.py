@@ -40,7 +40,7 @@ def make(out, args=None):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from maps import DesignMap
+    from snapmorph.maps import DesignMap
 
     dm = DesignMap.load(getattr(args, "map", None) if args is not None else None)
     ds = dm.dataset

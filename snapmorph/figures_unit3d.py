@@ -223,10 +223,10 @@ def study(out, tilts=(0.0, 1.0, 2.0, 5.0), heights_mm=(20.0, 40.0), nodes=None):
     unit2d_states.png into ``out``. Returns the rows of the knock-down study."""
     import os
 
-    from solver.unit import simulate_unit
-    from units.frame3d import UnitGeometry
-    from units.unit2d import simulate_unit_2d
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units import simulate_unit
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.unit2d import simulate_unit_2d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     os.makedirs(out, exist_ok=True)
     g = UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3)

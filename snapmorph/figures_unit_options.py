@@ -25,7 +25,7 @@ W_MM = 5.0
 
 def specimen(hn, t, **kw):
     """The Table 1 specimen (nominal h mm, t mm) as a UnitGeometry (b = w = 5 mm)."""
-    from units import UnitGeometry
+    from snapmorph.units import UnitGeometry
 
     h, L = TABLE1[hn, t]
     return UnitGeometry(L=L * MM, h=h * MM, t=t * MM, w=W_MM * MM, b=W_MM * MM, **kw)
@@ -33,7 +33,7 @@ def specimen(hn, t, **kw):
 
 def bond_sweep(bonds_mm=BONDS_MM, thicknesses=(0.50, 0.75)) -> dict:
     """{(t mm, bond mm): UnitResult} of the h = 10 mm specimens."""
-    from units import simulate_unit
+    from snapmorph.units import simulate_unit
 
     return {(t, bd): simulate_unit(specimen(10, t, bond_length=bd * MM))
             for t in thicknesses for bd in bonds_mm}
@@ -41,7 +41,7 @@ def bond_sweep(bonds_mm=BONDS_MM, thicknesses=(0.50, 0.75)) -> dict:
 
 def joint_results() -> dict:
     """{(nominal h, t, joint mm): UnitResult} for the Table 1 specimens, joint 3.175 and 0."""
-    from units import simulate_unit
+    from snapmorph.units import simulate_unit
 
     return {(hn, t, j): simulate_unit(specimen(hn, t, joint_length=j * MM))
             for (hn, t) in TABLE1 for j in (3.175, 0.0)}

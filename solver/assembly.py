@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from solver.energies import bending_terms, spring_terms, stretch_terms
+from snapmorph.solver.energies import bending_terms, spring_terms, stretch_terms
 
 
 @njit(cache=True)

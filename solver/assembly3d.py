@@ -21,8 +21,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from solver.energies3d import pair_edge_scratch, pair_terms_edges, stretch_terms
-from solver.frames3d import frame_jet_scratch, material_frame_jet_ws
+from snapmorph.solver.energies3d import pair_edge_scratch, pair_terms_edges, stretch_terms
+from snapmorph.solver.frames3d import frame_jet_scratch, material_frame_jet_ws
 
 
 def element_dofs3d(n_nodes, edge_nodes, n_edges, pair_edges, dof_map):

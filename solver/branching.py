@@ -38,8 +38,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from solver.banded import ldlt_factor, ldlt_solve
-from solver.stability import CriticalPoint, critical_modes, expand_full, expand_mode, held_count
+from snapmorph.solver.banded import ldlt_factor, ldlt_solve
+from snapmorph.solver.stability import CriticalPoint, critical_modes, expand_full, expand_mode, held_count
 
 BRANCHES = ("follow", "primary")
 
@@ -137,7 +137,7 @@ class BranchMonitor:
     @property
     def system(self):
         if self._system is None:
-            from solver.continuation import _driver_system
+            from snapmorph.solver.continuation import _driver_system
 
             self._system = _driver_system(self.structure)[0]
         return self._system
@@ -145,7 +145,7 @@ class BranchMonitor:
     @property
     def P(self):
         if self._P is None:
-            from solver.continuation import _load_vector
+            from snapmorph.solver.continuation import _load_vector
 
             self._P = _load_vector(self.system, self.control) * self.load_unit
         return self._P
@@ -464,7 +464,7 @@ class BranchMonitor:
     def held_system(self):
         """The system with the pushed displacement held (built when first needed)."""
         if self._held is None:
-            from solver.continuation import _driver_system
+            from snapmorph.solver.continuation import _driver_system
 
             self._held = _driver_system(
                 self.structure, [(self.control.node, self.control_axis)])[0]
@@ -520,7 +520,7 @@ class BranchMonitor:
         nothing as the corrector slides off along the mode) was moved on by the rig onto
         the other branch with no critical point recorded (3-D lateral-torsional
         buckling at 201 nodes)."""
-        from solver.continuation import _newton  # (a cycle at import time otherwise)
+        from snapmorph.solver.continuation import _newton  # (a cycle at import time otherwise)
 
         ctl, axis = self.control, self.control_axis
         sysd = self.held_system
@@ -582,7 +582,7 @@ class BranchMonitor:
         gap = float(np.linalg.norm(q - c.q))
         back = q.copy()
         back[held] = q0[held] + ctl.direction[axis] * (c.d + 0.25 * delta)
-        from solver.continuation import _newton  # (a cycle at import time otherwise)
+        from snapmorph.solver.continuation import _newton  # (a cycle at import time otherwise)
 
         it = _newton(sysd, back, 0.0, None, self.tol * self.fscale, 1e-11 * self.length,
                      self.max_iter, 0.25 * self.length)

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from solver.branching import BranchMonitor, PathState
-from solver.stability import held_count
+from snapmorph.solver.branching import BranchMonitor, PathState
+from snapmorph.solver.stability import held_count
 
 
 # Newton has converged when the residual is below tol x the force scale, or when the last

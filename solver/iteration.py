@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from solver.assembly import assemble_system
-from solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
+from snapmorph.solver.assembly import assemble_system
+from snapmorph.solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
 
 
 @njit(cache=True)

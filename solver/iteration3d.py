@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from numba import njit
 
-from solver.assembly3d import apply_scaled_increment, assemble_system3d_ws
-from solver.iteration import max_abs, mgdc_correction, newton_correction
+from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws
+from snapmorph.solver.iteration import max_abs, mgdc_correction, newton_correction
 
 
 @njit(cache=True)

@@ -17,7 +17,7 @@ import scipy.sparse
 import scipy.sparse.csgraph
 from numba import njit
 
-from solver.banded import profile_heights
+from snapmorph.solver.banded import profile_heights
 
 #: at most this many peripheral start nodes are tried (spread over the candidates)
 MAX_STARTS = 8

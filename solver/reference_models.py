@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver.structure import Structure
+from snapmorph.solver.structure import Structure
 
 
 def clamped_arch(h, n_nodes=101, t=0.5e-3, l=0.1, w=5e-3, E=2.2e9, centre_clamped=True):

@@ -102,7 +102,7 @@ def state_stability(structure, positions, node, direction=(0.0, -1.0),
     The state need not be solved here; it should be an equilibrium for the counts to mean
     stability. ``system``: the structure's `reduced_system()` to reuse (several states).
     Raises ValueError when K is singular (a critical state)."""
-    from solver.continuation import _load_unit, _load_vector, make_control, state_from
+    from snapmorph.solver.continuation import _load_unit, _load_vector, make_control, state_from
 
     length, fscale = structure.scales()
     control = make_control(structure, node, direction, 1e-3 * length, "mgdc")
@@ -168,7 +168,7 @@ def eigenmodes(structure, count=6, positions=None, hold=()):
     over the free DOFs and its largest component positive. Use a mode as an imperfection
     shape with `seed_imperfection`."""
     system = structure.reduced_system(extra_fixed=list(hold) or None)
-    from solver.continuation import state_from
+    from snapmorph.solver.continuation import state_from
 
     system.evaluate(state_from(structure, positions))
     count = int(min(max(count, 1), system.n))

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.optimize
 
-from solver.continuation import TOL_DISP, ConvergenceError, _newton, make_control, state_from
+from snapmorph.solver.continuation import TOL_DISP, ConvergenceError, _newton, make_control, state_from
 
 
 #: `DisplacementProbe.solve`: the numbers of equal steps in which the prescribed displacement

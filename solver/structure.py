@@ -13,7 +13,7 @@ import numpy as np
 import scipy.sparse
 import scipy.sparse.csgraph
 
-from solver.system import ReducedSystem
+from snapmorph.solver.system import ReducedSystem
 
 _COMPONENTS = {"x": (0,), "z": (1,), "xz": (0, 1), "zx": (0, 1)}
 
@@ -611,7 +611,7 @@ class Structure:
     # ------------------------------------------------------------------ energy access
     def energy(self, positions=None) -> float:
         """Total elastic energy (J) at ``positions`` (n_nodes, 2) m (default: reference)."""
-        from solver.assembly import total_energy
+        from snapmorph.solver.assembly import total_energy
 
         q = self._flat(positions)
         return float(total_energy(q, self.elements()))
@@ -644,7 +644,7 @@ class Structure:
     def _flat(self, positions):
         if positions is None:
             return self.initial_state()
-        from solver.continuation import state_from
+        from snapmorph.solver.continuation import state_from
 
         return state_from(self, positions)
 
@@ -659,7 +659,7 @@ class Structure:
         Returns a `solver.continuation.Path`. Options: see the drivers in
         `solver.continuation`.
         """
-        from solver.continuation import follow_displacement, follow_mgdc, make_control
+        from snapmorph.solver.continuation import follow_displacement, follow_mgdc, make_control
 
         control = make_control(self, node, direction, distance, method)
         if method == "mgdc":
@@ -669,7 +669,7 @@ class Structure:
     def solve_equilibrium(self, positions, node=None, direction=(0.0, -1.0), force=0.0, **options):
         """Equilibrium near ``positions`` with ``force`` (N) applied to ``node`` along
         ``direction`` (no load when ``node`` is None). Returns (positions, info dict)."""
-        from solver.continuation import equilibrium
+        from snapmorph.solver.continuation import equilibrium
 
         return equilibrium(self, positions, node, direction, force, **options)
 

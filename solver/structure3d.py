@@ -19,11 +19,11 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse
 
-from solver.energies3d import material_curvature, tip_moment_terms, twist_angle
-from solver.frames3d import space_parallel_frames
-from solver.ordering import envelope_order
-from solver.structure import UnionFind
-from solver.system3d import RodSystem3D
+from snapmorph.solver.energies3d import material_curvature, tip_moment_terms, twist_angle
+from snapmorph.solver.frames3d import space_parallel_frames
+from snapmorph.solver.ordering import envelope_order
+from snapmorph.solver.structure import UnionFind
+from snapmorph.solver.system3d import RodSystem3D
 
 _AXES = "xyz"
 
@@ -537,7 +537,7 @@ class Structure3D:
         n_groups = len(uniq) + ne  # node groups, then one group per edge twist
         group_of_full = np.concatenate([np.repeat(group, 3), len(uniq) + np.arange(ne)])
         dof_map0 = np.arange(3 * n + ne)
-        from solver.assembly3d import element_dofs3d
+        from snapmorph.solver.assembly3d import element_dofs3d
 
         sf, _, pf, _ = element_dofs3d(n, model["edge_nodes"], ne, model["pair_edges"], dof_map0)
         key = "group_order"
@@ -629,7 +629,7 @@ class Structure3D:
 
         Returns a `solver.continuation.Path`: displacement (K,), force (K,), positions
         (K, n_nodes, 3), twist (K, n_edges), status, stability counts, critical points."""
-        from solver.continuation import follow_displacement, follow_mgdc, make_control
+        from snapmorph.solver.continuation import follow_displacement, follow_mgdc, make_control
 
         control = make_control(self, node, direction, distance, method)
         if method == "mgdc":
@@ -642,7 +642,7 @@ class Structure3D:
         the equilibrium under ``force`` (N) on ``node`` along ``direction`` (no load when
         ``node`` is None), with the planar solver's `solver.continuation.equilibrium`.
         Returns (positions (n_nodes, 3), info dict with the full "state")."""
-        from solver.continuation import equilibrium
+        from snapmorph.solver.continuation import equilibrium
 
         return equilibrium(self, positions, node, direction, force, **options)
 
@@ -655,7 +655,7 @@ class Structure3D:
         curvatures and twists are raised to their values in this many equal stages (a
         homotopy through equilibria). The reference frames are carried along after every
         step. Returns (q, info dict)."""
-        from solver.banded import band_to_dense
+        from snapmorph.solver.banded import band_to_dense
 
         q = self.initial_state() if q is None else self.state(self.positions_of(q),
                                                               self.twist_of(q))

@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from solver.assembly import apply_increment, assemble_system, element_dofs
-from solver.banded import (band_to_dense, envelope_heights, ldlt_factor_envelope,
+from snapmorph.solver.assembly import apply_increment, assemble_system, element_dofs
+from snapmorph.solver.banded import (band_to_dense, envelope_heights, ldlt_factor_envelope,
                            ldlt_solve_envelope)
-from solver.iteration import mgdc_iteration, newton_iteration
+from snapmorph.solver.iteration import mgdc_iteration, newton_iteration
 
 # A pivot smaller than this times the largest diagonal entry means K is numerically singular
 # for LDL^T without pivoting; the dense pivoting fallback then takes over.

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver.assembly3d import apply_scaled_increment, assemble_system3d_ws, element_dofs3d
-from solver.banded import envelope_heights
-from solver.frames3d import canonical_twist_offset, reference_twist, transport_frames
-from solver.iteration3d import mgdc_iteration3d, newton_iteration3d
-from solver.system import PIVOT_TOL, ReducedSystem
+from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws, element_dofs3d
+from snapmorph.solver.banded import envelope_heights
+from snapmorph.solver.frames3d import canonical_twist_offset, reference_twist, transport_frames
+from snapmorph.solver.iteration3d import mgdc_iteration3d, newton_iteration3d
+from snapmorph.solver.system import PIVOT_TOL, ReducedSystem
 
 
 class RodSystem3D(ReducedSystem):

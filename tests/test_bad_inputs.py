@@ -80,10 +80,10 @@ def _fixtures(tmp):
 def _namespace(tmp):
     import numpy as np
 
-    from design import Unit, forward_kinematics, inverse_design, spacer
-    from maps import DesignMap
-    from solver import Structure
-    from solver.unit import UnitGeometry, simulate_unit
+    from snapmorph.design import Unit, forward_kinematics, inverse_design, spacer
+    from snapmorph.maps import DesignMap
+    from snapmorph.solver import Structure
+    from snapmorph.units import UnitGeometry, simulate_unit
 
     cache = {}
 

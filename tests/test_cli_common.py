@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from design.units import Unit, read_placement, read_units_csv, write_units_csv
+from snapmorph.design.units import Unit, read_placement, read_units_csv, write_units_csv
 from snapmorph.commands._common import (CommandError, input_file, integer, length_mm, number,
                                         output_dir, output_file, plot_file)
 
@@ -186,7 +186,7 @@ def test_fk_csv_is_in_the_targets_frame(tmp_path, capsys):
 
 def test_plot_transform_matches_chain_placement():
     """The frame transform the array plots use is the one `chain` uses for its start."""
-    from design import chain
+    from snapmorph.design import chain
     from snapmorph.plotting.arrays import transform
 
     units = [Unit(L=0.1, h=0.0, t=5e-4, w=5e-3), Unit(L=0.05, h=0.0, t=5e-4, w=5e-3)]

@@ -148,9 +148,9 @@ def test_example_units_fit_the_example_target(tmp_path):
     the target's length of the predicted base."""
     import numpy as np
 
-    from design import chain
-    from design.targets import arc_length, distances_to_polyline, read_target_csv
-    from design.units import read_placement, read_units_csv
+    from snapmorph.design import chain
+    from snapmorph.design.targets import arc_length, distances_to_polyline, read_target_csv
+    from snapmorph.design.units import read_placement, read_units_csv
 
     units = read_units_csv(ROOT / "examples" / "units_M.csv")
     placement = read_placement(ROOT / "examples" / "units_M.csv")

@@ -7,8 +7,13 @@ live here and are re-exported where their public names lived before (`solver.uni
 `units.planar` (`simulate_unit`, `UnitResult`), also importable from `units` itself.
 """
 
-_LAZY = {"UnitGeometry": "units.geometry", "build_unit": "units.geometry",
-         "simulate_unit": "units.planar", "UnitResult": "units.planar"}
+if __name__ != "snapmorph.units":  # imported under its pre-0.2 top-level name `units`
+    from _snapmorph_legacy import alias_old_name  # warns, then hands out snapmorph.units
+
+    alias_old_name(__name__)
+
+_LAZY = {"UnitGeometry": "snapmorph.units.geometry", "build_unit": "snapmorph.units.geometry",
+         "simulate_unit": "snapmorph.units.planar", "UnitResult": "snapmorph.units.planar"}
 
 
 def __getattr__(name):  # lazy, so that importing units.<model> stays light

@@ -31,7 +31,7 @@ import time
 
 import numpy as np
 
-from units.frame3d import Mesh3D, end_tangent_angle
+from snapmorph.units.frame3d import Mesh3D, end_tangent_angle
 
 __all__ = ["run_variant", "joint_kind", "VARIANTS", "DECISIVE"]
 
@@ -64,7 +64,7 @@ def _single_base(g, mesh: Mesh3D, model):
     width 4w over the end regions (edges whose midpoint is inside x0) and 2w between;
     the arch bond, rollers and actuator as in the frame model. Returns (mesh, base nodes,
     arch nodes, push node)."""
-    from units.frame3d import Mesh3D as M
+    from snapmorph.units.frame3d import Mesh3D as M
 
     old = mesh
     rail = old.rod("rail_left")
@@ -121,8 +121,8 @@ def run_variant(g, nodes=41, bar_factor=None, bar_modulus=None, bar_torsion=None
     """Push one variant through; returns a dict of metrics (SI, degrees) and timings.
     ``push_through``: the push driver (default `units.push3d.push_through`)."""
     if push_through is None:
-        from units.push3d import push_through
-    from units.unit3d import build_unit_mesh_3d, section_rotation_deg
+        from snapmorph.units.push3d import push_through
+    from snapmorph.units.unit3d import build_unit_mesh_3d, section_rotation_deg
 
     t0 = time.perf_counter()
     options.setdefault("end_plate", "stiff")

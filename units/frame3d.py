@@ -17,9 +17,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 try:  # the unit engineer moves UnitGeometry to units/; keep working before and after
-    from units.geometry import UnitGeometry  # noqa: F401 - re-exported
+    from snapmorph.units.geometry import UnitGeometry  # noqa: F401 - re-exported
 except ImportError:  # pragma: no cover - older tree
-    from solver.unit_model import UnitGeometry
+    from snapmorph.units.geometry import UnitGeometry
 
 PETG_NU = 0.38  # Poisson's ratio of PETG (unit-model.md)
 JOINT_LENGTH_DEFAULT = 0.003175  # m, 1/8 in acrylic stem (unit-model.md)
@@ -122,7 +122,7 @@ class Mesh3D:
 
     def to_structure(self):
         """The `solver.Structure3D` of this mesh (rods, joints, ties, supports, rigid groups)."""
-        from solver import Structure3D  # the 3-D solver (issue 13)
+        from snapmorph.solver import Structure3D  # the 3-D solver (issue 13)
 
         st = Structure3D()
         for r in self.rods:

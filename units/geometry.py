@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from solver.structure import Structure
+from snapmorph.solver.structure import Structure
 
 PETG_E = 2.2e9  # Pa
 SUPPORT_OFFSET = 0.03  # rollers at 0.03 L from each end
@@ -32,7 +32,7 @@ JOINT_LENGTH = 0.03175
 MIN_SPAN_FRACTION = 0.02
 MIN_SECTION_FRACTION = 1e-5  # t >= 1e-5 L (t = 1e-6 L does not converge)
 try:  # rods longer than this many thicknesses are refused by the solver
-    from solver.structure import MAX_SLENDERNESS
+    from snapmorph.solver.structure import MAX_SLENDERNESS
 except ImportError:  # pragma: no cover - an older solver
     MAX_SLENDERNESS = 1e5
 MIN_WIDTH_FRACTION = 1e-6  # w >= 1e-6 L

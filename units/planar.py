@@ -36,10 +36,10 @@ import numpy as np
 import dataclasses
 import inspect
 
-from solver.continuation import ConvergenceError
-from solver.stability import state_stability
-from solver.states import DisplacementProbe, refine_maximum, zero_force_displacement
-from units.geometry import DEFAULT_NODES, PETG_E, UnitGeometry, build_unit, check_nodes, check_real
+from snapmorph.solver.continuation import ConvergenceError
+from snapmorph.solver.stability import state_stability
+from snapmorph.solver.states import DisplacementProbe, refine_maximum, zero_force_displacement
+from snapmorph.units.geometry import DEFAULT_NODES, PETG_E, UnitGeometry, build_unit, check_nodes, check_real
 
 __all__ = ["UnitGeometry", "UnitResult", "simulate_unit", "STATUS_CODES", "DEFAULT_NODES"]
 
@@ -293,7 +293,7 @@ def _push_options(structure, push, deadline):
     per-step stop test otherwise."""
     if deadline is None:
         return push, None
-    from solver.continuation import follow_displacement, follow_mgdc
+    from snapmorph.solver.continuation import follow_displacement, follow_mgdc
 
     driver = follow_mgdc if push["method"] == "mgdc" else follow_displacement
     if "time_limit" in inspect.signature(driver).parameters:

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 # one implementation of the crossing rule for every unit (issue 16)
-from units.planar import _first_peak, _zero_crossings
+from snapmorph.units.planar import _first_peak, _zero_crossings
 
 NAN = float("nan")
 
@@ -113,7 +113,7 @@ def path_states(st, path):
 
 def _probe(st, node):
     try:
-        from solver.states import DisplacementProbe
+        from snapmorph.solver.states import DisplacementProbe
 
         return DisplacementProbe(st, node, DOWN)
     except Exception:  # noqa: BLE001 - the path samples then stand for the states
@@ -128,7 +128,7 @@ def refine_peak(probe, d, F, Q, i, tol=2e-3):
     error e in d costs ~ F'' e^2 / 2 in F_cr)."""
     if probe is not None and d[i - 1] < d[i] < d[i + 1]:
         try:
-            from solver.states import refine_maximum
+            from snapmorph.solver.states import refine_maximum
 
             F_max, d_max = refine_maximum(probe, d, F, Q, i, tol_d=tol * (d[i + 1] - d[i - 1]))
             if F_max >= F[i]:
@@ -219,7 +219,7 @@ def _zero_state(st, path, Q, i, node, probe):
         if hasattr(st, "solve_equilibrium"):
             pos, info = st.solve_equilibrium(q, node=None)
         else:
-            from solver.continuation import equilibrium
+            from snapmorph.solver.continuation import equilibrium
 
             pos, info = equilibrium(st, q, None, DOWN, 0.0)
         return np.array(pos), np.array(info["state"])
@@ -232,7 +232,7 @@ def _zero_state(st, path, Q, i, node, probe):
         pass
     if probe is not None:
         try:
-            from solver.states import zero_force_displacement
+            from snapmorph.solver.states import zero_force_displacement
 
             tol_F = 1e-9 * max(abs(F[i - 1]), abs(F[i]))
             zero_force_displacement(probe, d[i - 1], d[i], Q[i - 1], Q[i], F[i - 1], F[i],
@@ -250,7 +250,7 @@ def _zero_state(st, path, Q, i, node, probe):
 def _state_stability(st, q, node, system):
     """`StateStability` of the equilibrium ``q`` with ``node`` loaded along -z; None when the
     tangent stiffness is singular there (a critical state)."""
-    from solver.stability import state_stability
+    from snapmorph.solver.stability import state_stability
 
     try:
         return state_stability(st, q, node, DOWN, system=system)

@@ -23,14 +23,14 @@ MM = 1e-3
 
 
 def _geometry(h, t, L, w=5.0, b=5.0):
-    from units.frame3d import UnitGeometry
+    from snapmorph.units.frame3d import UnitGeometry
 
     return UnitGeometry(L=L * MM, h=h * MM, t=t * MM, w=w * MM, b=b * MM)
 
 
 def table1(nodes=(41, 81), plates=("elastic", "stiff")):
-    from solver.unit import simulate_unit
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units import simulate_unit
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     rows = []
     for h, t, L in TABLE1:
@@ -61,7 +61,7 @@ def table1(nodes=(41, 81), plates=("elastic", "stiff")):
 
 
 def tilt(nodes=41, tilts=(0.0, 1.0, 2.0, 5.0), heights=(19.24, 40.68), t=0.5, plate="elastic"):
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     rows = []
     for h in heights:
@@ -86,8 +86,8 @@ def tilt(nodes=41, tilts=(0.0, 1.0, 2.0, 5.0), heights=(19.24, 40.68), t=0.5, pl
 
 
 def unit2d(nodes=(21, 41, 81), h=40.0, t=0.5, L=100.0, w=5.0):
-    from units.frame3d import UnitGeometry
-    from units.unit2d import simulate_unit_2d
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.unit2d import simulate_unit_2d
 
     g = UnitGeometry(L=L * MM, h=h * MM, t=t * MM, w=w * MM)
     out = []
@@ -106,7 +106,7 @@ def unit2d(nodes=(21, 41, 81), h=40.0, t=0.5, L=100.0, w=5.0):
 
 
 def map2d(nodes=41, h_over_L=(0.2, 0.25, 0.3, 0.35, 0.4), t_over_L=(0.004, 0.005, 0.0075)):
-    from units.unit2d import solve_map_point
+    from snapmorph.units.unit2d import solve_map_point
 
     for hl in h_over_L:
         for tl in t_over_L:
@@ -130,8 +130,8 @@ def theta_residual(nodes=(41, 81), which="all"):
     converged planar model. ``which``: "all" (every variant at the two specimens),
     "decisive" (`units.diagnostics3d.DECISIVE`: the mesh convergence), "table1" (the
     shipped stiff plates and the rigid bars over the six Table 1 specimens)."""
-    from solver.unit import simulate_unit
-    from units.diagnostics3d import DECISIVE, VARIANTS, run_variant
+    from snapmorph.units import simulate_unit
+    from snapmorph.units.diagnostics3d import DECISIVE, VARIANTS, run_variant
 
     if which not in ("all", "decisive", "table1"):
         raise SystemExit(f"theta_residual: unknown set {which!r}: all, decisive or table1")

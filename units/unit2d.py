@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from units.frame3d import (
+from snapmorph.units.frame3d import (
     JOINT_LENGTH_DEFAULT,
     PETG_NU,
     Mesh3D,
@@ -60,8 +60,8 @@ from units.frame3d import (
     end_tangent_angle,
     segment_points,
 )
-from units.planar import ReleasedMetrics
-from units.push3d import level, push_through, record_release, relax_released, transfer_state
+from snapmorph.units.planar import ReleasedMetrics
+from snapmorph.units.push3d import level, push_through, record_release, relax_released, transfer_state
 
 __all__ = ["Unit2DModel", "Unit2DResult", "build_unit_mesh_2d", "build_unit_2d",
            "simulate_unit_2d", "edge_metrics", "DEFAULT_NODES_2D", "SIDES"]
@@ -516,7 +516,7 @@ def solve_map_point(h_over_L, t_over_L, w_over_L=0.05, b_over_L=0.0, resolution=
 
 
 def _map_presets():
-    from pipeline.solvers import MapGrid
+    from snapmorph.pipeline.solvers import MapGrid
 
     return {
         "small": MapGrid({"h_over_L": (0.25, 0.3, 0.35, 0.4, 0.45),
@@ -527,11 +527,11 @@ def _map_presets():
 
 
 def _map_spec():
-    from pipeline.solvers import SolverSpec
+    from snapmorph.pipeline.solvers import SolverSpec
 
     return SolverSpec(
         name="unit2d",
-        solve="units.unit2d:solve_map_point",
+        solve="snapmorph.units.unit2d:solve_map_point",
         dims=("h_over_L", "t_over_L"),
         float_vars={
             "F_cr": ("1", "critical force before snap through, F_cr L^2 / (E w t^3 / 12)"),
@@ -573,8 +573,8 @@ def _map_spec():
                           "edge_theta", "edge_curvature"),
         options={"w_over_L": 0.05, "b_over_L": 0.0, "resolution": DEFAULT_NODES_2D},
         presets=_map_presets(),
-        sources=("solver", "units.unit2d", "units.frame3d", "units.push3d", "units.planar",
-                 "units.geometry"),
+        sources=("snapmorph.solver", "snapmorph.units.unit2d", "snapmorph.units.frame3d", "snapmorph.units.push3d", "snapmorph.units.planar",
+                 "snapmorph.units.geometry"),
         title="snapmorph map of the 2-D unit (square frame, two crossing arches)",
     )
 

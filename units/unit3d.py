@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from units.frame3d import (
+from snapmorph.units.frame3d import (
     JOINT_LENGTH_DEFAULT,
     PETG_NU,
     SUPPORT_OFFSET,
@@ -51,8 +51,8 @@ from units.frame3d import (
     end_tangent_angle,
     segment_points,
 )
-from units.planar import ReleasedMetrics
-from units.push3d import (PushOutcome, level, push_through, record_release, relax_released,
+from snapmorph.units.planar import ReleasedMetrics
+from snapmorph.units.push3d import (PushOutcome, level, push_through, record_release, relax_released,
                           transfer_state)
 
 __all__ = ["Unit3DModel", "Unit3DResult", "build_unit_mesh_3d", "build_unit_3d",

@@ -5,8 +5,8 @@ The clamped cosine arch (l = 0.1 m, t = 0.5 mm) with its centre clamped and with
 rotation free: F_max, F_min in EI h / l^3 on the followed and the primary path, the located
 bifurcations, and F_max with a 1e-4 t imperfection in the critical mode.
 """
-from solver import reference_models
-from solver.stability import seed_imperfection
+from snapmorph.solver import reference_models
+from snapmorph.solver.stability import seed_imperfection
 from tests.solver.models import first_peak_index
 
 T, L_SPAN = 0.5e-3, 0.1

@@ -1,8 +1,8 @@
 """Report script behind the figures quoted in the issue notes; run from the repository root
 with PYTHONPATH=. .venv/bin/python bench/reports/unit_convergence.py."""
 import numpy as np, time
-from solver.unit import UnitGeometry, simulate_unit
-from solver.unit_model import DEFAULT_NODES
+from snapmorph.units import UnitGeometry, simulate_unit
+from snapmorph.units.geometry import DEFAULT_NODES
 cases=[UnitGeometry(L=0.1,h=0.02,t=0.5e-3,w=5e-3,b=5e-3),UnitGeometry(L=0.1,h=0.04,t=0.75e-3,w=5e-3,b=5e-3),
        UnitGeometry(L=0.1,h=0.01,t=0.5e-3,w=5e-3,b=5e-3),
        UnitGeometry(L=0.1,h=0.05,t=1.25e-3,w=10e-3,b=0), UnitGeometry(L=0.1,h=0.03,t=0.25e-3,w=2e-3,b=0),
@@ -14,7 +14,7 @@ for g in cases:
     print("| %.2f | %.4f | %.2f | %.2f | %+.3f %% | %+.5f | %+.3f |"%(g.h/g.L,g.t/g.L,g.w/g.L,g.b/g.L,100*(a.F_cr/f.F_cr-1),(a.S-f.S)/g.L,a.theta_deg-f.theta_deg))
 g=UnitGeometry(L=0.0995,h=0.01924,t=0.5e-3,w=5e-3,b=5e-3)
 e=simulate_unit(g,check_self_standing=False)
-from solver.unit_model import build_unit
+from snapmorph.units.geometry import build_unit
 k0=build_unit(g,tie="spring").structure._spring_params[0][0]
 for k in [None, 10*k0, 100*k0]:
     s=simulate_unit(g,tie="spring",tie_stiffness=k,check_self_standing=False)

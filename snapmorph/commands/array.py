@@ -104,8 +104,8 @@ def run(args) -> int:
 
     study = _check(args)
     if study:
-        from design.array_plots import plot_study
-        from design.array_study import paper_three_units, run_study, table3_M_units
+        from snapmorph.design.array_plots import plot_study
+        from snapmorph.design.array_study import paper_three_units, run_study, table3_M_units
         if args.paper_three:
             b = None if args.b is None else args.b * 1e-3
             units = paper_three_units(b)
@@ -138,8 +138,8 @@ def run(args) -> int:
 
 def _read_units(args):
     """(units, placement or None, overlay target in m or None) from --units / --overlay."""
-    from design.targets import read_target_csv
-    from design.units import read_placement, read_units_csv
+    from snapmorph.design.targets import read_target_csv
+    from snapmorph.design.units import read_placement, read_units_csv
 
     units = read_units_csv(args.units, b_over_L=args.b_over_L)
     placement = None if args.no_placement else read_placement(args.units)
@@ -152,17 +152,17 @@ def _one_state(args) -> int:
 
     import numpy as np
 
-    from design.array_study import curve_deviation
-    from design.arrays import simulate_array
-    from design.kinematics import chain
-    from design.targets import distances_to_polyline
+    from snapmorph.design.array_study import curve_deviation
+    from snapmorph.design.arrays import simulate_array
+    from snapmorph.design.kinematics import chain
+    from snapmorph.design.targets import distances_to_polyline
     from snapmorph.commands.fk import check_state
     from snapmorph.plotting.arrays import transform
 
     units, placement, target = _read_units(args)
     snapped = check_state(args.state, units)
     if args.order is not None:
-        from design.arrays import _order
+        from snapmorph.design.arrays import _order
         from snapmorph.commands._common import CommandError
 
         try:
@@ -206,7 +206,7 @@ def _one_state(args) -> int:
                    comments="")
         print(f"wrote {args.csv}")
     if args.plot:
-        from design.array_plots import plot_result
+        from snapmorph.design.array_plots import plot_result
 
         frame = ("target's frame (units.csv placement)" if placement else
                  "array frame: clamp at (0, 0), heading +x")

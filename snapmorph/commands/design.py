@@ -124,8 +124,8 @@ def run(args) -> int:
         raise CommandError(f"--map {args.map}: design map not found (no such file)")
     from tqdm import tqdm
 
-    from design import inverse_design
-    from design.lookup import load_map
+    from snapmorph.design import inverse_design
+    from snapmorph.design.lookup import load_map
     from snapmorph.commands._common import output_dir
 
     dm = load_map(args.map)

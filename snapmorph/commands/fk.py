@@ -65,8 +65,8 @@ def check_state(text, units, option="--state"):
 
 def load_units(args):
     """(units, placement or None) from --units; the target from --overlay (m) or None."""
-    from design.targets import read_target_csv
-    from design.units import read_placement, read_units_csv
+    from snapmorph.design.targets import read_target_csv
+    from snapmorph.design.units import read_placement, read_units_csv
     from snapmorph.commands._common import input_file
 
     path = input_file(args.units, "--units")
@@ -99,9 +99,9 @@ def run(args) -> int:
 
     import numpy as np
 
-    from design import all_states, chain
-    from design.lookup import MapLookup, load_map
-    from design.targets import distances_to_polyline
+    from snapmorph.design import all_states, chain
+    from snapmorph.design.lookup import MapLookup, load_map
+    from snapmorph.design.targets import distances_to_polyline
     from snapmorph.plotting.arrays import plot_fk_state, plot_fk_states
 
     # Read and check the files and the state before loading the map (the slow part).

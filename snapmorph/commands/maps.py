@@ -16,7 +16,7 @@ import argparse
 import math
 
 GRIDS = ("default", "ci")
-DEFAULT_SOLVER = "pipeline.point:solve_point"
+DEFAULT_SOLVER = "snapmorph.pipeline.point:solve_point"
 DEFAULT_KIND = "unit"
 DEFAULT_TIME_LIMIT = 60.0  # s per point; pipeline.build.DEFAULT_TIME_LIMIT (not imported: --help stays light)
 DEFAULT_CONNECT_TIMEOUT = 5.0
@@ -183,7 +183,7 @@ def add_parser(subparsers) -> None:
 
 
 def _spec_and_grid(args):
-    from pipeline.solvers import get_spec
+    from snapmorph.pipeline.solvers import get_spec
 
     try:
         spec = get_spec(args.kind)
@@ -206,7 +206,7 @@ def _spec_and_grid(args):
 
 
 def _solver(args, spec):
-    from pipeline.batch import resolve_solver
+    from snapmorph.pipeline.batch import resolve_solver
 
     solve = args.solver or spec.solve
     try:
@@ -217,7 +217,7 @@ def _solver(args, spec):
 
 
 def _build(args, out, restart, force=False, keep_solve_time=False):
-    from pipeline.build import SchedulerConnectError, build_map
+    from snapmorph.pipeline.build import SchedulerConnectError, build_map
     from snapmorph.cli import CommandError
 
     spec, grid = _spec_and_grid(args)
@@ -233,7 +233,7 @@ def _build(args, out, restart, force=False, keep_solve_time=False):
 
 
 def _run_build(args) -> int:
-    from pipeline.build import allowed_failures
+    from snapmorph.pipeline.build import allowed_failures
     from snapmorph.commands._common import output_file
 
     spec, _ = _spec_and_grid(args)  # option errors before anything touches the disk
@@ -255,14 +255,14 @@ def _run_check(args) -> int:
 
     import xarray as xr
 
-    from pipeline.compare import Difference, compare_maps
+    from snapmorph.pipeline.compare import Difference, compare_maps
     from snapmorph.commands._common import input_file
 
     spec, _ = _spec_and_grid(args)
     _solver(args, spec)
     against = input_file(args.against, "--against")
     if spec.name == "unit":
-        from maps.designmap import DesignMap
+        from snapmorph.maps.designmap import DesignMap
 
         expected = DesignMap.load(against).dataset  # validates the schema
     else:
@@ -315,8 +315,8 @@ def _info_other_kind(path, kind) -> int:
 def _run_info(args) -> int:
     import numpy as np
 
-    from maps.designmap import DesignMap
-    from pipeline.schema import STATUS_CODES
+    from snapmorph.maps.designmap import DesignMap
+    from snapmorph.pipeline.schema import STATUS_CODES
 
     if args.file:
         try:

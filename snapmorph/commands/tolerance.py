@@ -67,9 +67,9 @@ def run(args: argparse.Namespace) -> int:
     plot_path = plot_file(args.plot, "--plot") if args.plot else None
     json_path = output_file(args.json, "--json") if args.json else None
 
-    from design.lookup import load_map
-    from design.tolerance import plot_tolerance, tolerance
-    from design.units import read_placement, read_units_csv
+    from snapmorph.design.lookup import load_map
+    from snapmorph.design.tolerance import plot_tolerance, tolerance
+    from snapmorph.design.units import read_placement, read_units_csv
 
     dm = load_map(args.map)
     b_over_L = float(dm.attrs.get("b_over_L", 0.0))
@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
               f"({100.0 * sum(contained) / max(len(contained), 1):.0f} %)")
     target = None
     if args.target:
-        from design.targets import read_target_csv
+        from snapmorph.design.targets import read_target_csv
 
         target, _ = read_target_csv(args.target)
         placement = read_placement(units_path)
@@ -117,8 +117,8 @@ def run(args: argparse.Namespace) -> int:
 def simulate_perturbed(units, sigma, k, seed, result):
     """Simulate ``k`` whole arrays (all snapped) with independently perturbed units: (list of
     (K, 2) bases, list of bool inside the envelope). Arrays that fail are skipped."""
-    from design.tolerance import perturbed_units
-    from design.arrays import simulate_array
+    from snapmorph.design.tolerance import perturbed_units
+    from snapmorph.design.arrays import simulate_array
 
     curves, inside = [], []
     for us in perturbed_units(units, sigma, k, seed):

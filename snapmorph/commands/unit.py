@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
 
     from snapmorph.cli import CommandError
     from snapmorph.commands._common import output_file, plot_file
-    from units.geometry import geometry_problem
+    from snapmorph.units.geometry import geometry_problem
 
     mm = 1e-3
     dims = dict(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm, b=args.b * mm,
@@ -70,8 +70,8 @@ def run(args: argparse.Namespace) -> int:
     json_path = output_file(args.json, "--json") if args.json else None
     plot_path = plot_file(args.plot, "--plot") if args.plot else None
 
-    from units.geometry import UnitGeometry
-    from units.planar import simulate_unit
+    from snapmorph.units.geometry import UnitGeometry
+    from snapmorph.units.planar import simulate_unit
 
     g = UnitGeometry(**dims)
     r = simulate_unit(g, nodes=args.nodes, method=args.method, time_limit=args.time_limit)

@@ -36,8 +36,8 @@ def run(args: argparse.Namespace) -> int:
 
     plot = plot_file(args.plot)
     js = output_file(args.json, "--json")
-    from units.frame3d import UnitGeometry
-    from units.unit2d import SIDES, simulate_unit_2d
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.unit2d import SIDES, simulate_unit_2d
 
     mm = 1e-3
     g = UnitGeometry(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm, b=args.b * mm,

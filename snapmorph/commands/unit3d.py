@@ -44,8 +44,8 @@ def run(args: argparse.Namespace) -> int:
 
     plot = plot_file(args.plot)
     js = output_file(args.json, "--json")
-    from units.frame3d import UnitGeometry
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     from snapmorph.cli import CommandError
 
@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
                          actuator_offset=args.actuator_offset * mm, nu=args.nu)
     planar = None
     if args.planar:
-        from solver.unit import simulate_unit
+        from snapmorph.units import simulate_unit
 
         planar = simulate_unit(g)
     rows = [("status", r.status, ""), ("bistable", format_value(r.bistable), ""),

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 # one Agg set-up and one way of saving for every figure of the project
-from design.plots import _plt, _save
+from snapmorph.design.plots import _plt, _save
 
 #: Okabe-Ito colours (safe for the common colour-vision deficiencies).
 OKABE_ITO = {"blue": "#0072B2", "orange": "#E69F00", "green": "#009E73", "vermillion": "#D55E00",

@@ -23,7 +23,7 @@ TABLE1 = {
 
 def simulate_specimens(which="average"):
     """{(h_nominal, t): UnitResult} for the six specimens, nominal or measured-average sizes."""
-    from solver.unit import UnitGeometry, simulate_unit
+    from snapmorph.units import UnitGeometry, simulate_unit
 
     out = {}
     for (hn, t), (h_avg, L_avg) in TABLE1.items():

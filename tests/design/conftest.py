@@ -15,13 +15,13 @@ def synthetic_map_path(tmp_path_factory):
 @pytest.fixture(scope="session")
 def design_map(synthetic_map_path):
     """The synthetic map, loaded through maps.DesignMap."""
-    from maps import DesignMap
+    from snapmorph.maps import DesignMap
 
     return DesignMap.load(synthetic_map_path)
 
 
 @pytest.fixture(scope="session")
 def lookup(design_map):
-    from design.lookup import MapLookup
+    from snapmorph.design.lookup import MapLookup
 
     return MapLookup(design_map)

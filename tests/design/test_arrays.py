@@ -22,10 +22,10 @@ import math
 import numpy as np
 import pytest
 
-from design import Unit
-from design.array_study import (curve_deviation, fk_released, paper_three_units,
+from snapmorph.design import Unit
+from snapmorph.design.array_study import (curve_deviation, fk_released, paper_three_units,
                                 released_shapes, run_study, shape_change)
-from design.arrays import build_array, rigid_residual, simulate_array
+from snapmorph.design.arrays import build_array, rigid_residual, simulate_array
 
 T, W = 0.5e-3, 5e-3
 EXACT = 1e-9  # of the array length, or m for shape changes (see the module docstring)
@@ -38,7 +38,7 @@ def three():
 
 
 def _single_unit_theta():
-    from solver.unit import UnitGeometry, simulate_unit
+    from snapmorph.units import UnitGeometry, simulate_unit
 
     g = UnitGeometry(L=0.1, h=0.02, t=T, w=W, b=W)
     return simulate_unit(g, check_self_standing=False).theta_deg
@@ -94,7 +94,7 @@ def test_one_unit_reproduces_the_single_unit_test():
     """With build_unit's mesh as it is, the actuator-on state (iii) of a one-unit array is
     simulate_unit's state (iii): same mesh, same constraints, so θ and d agree to Newton's
     tolerance (measured 1e-12 deg)."""
-    from solver.unit import UnitGeometry, simulate_unit
+    from snapmorph.units import UnitGeometry, simulate_unit
 
     u = Unit(L=0.1, h=0.02, t=T, w=W, side=1, b=W)
     ref = simulate_unit(UnitGeometry(L=u.L, h=u.h, t=u.t, w=u.w, b=u.b), nodes=81)
@@ -196,7 +196,7 @@ def test_three_units_every_state(three):
 def test_three_units_conjecture(three):
     """Forward kinematics of released single units (the default state) is the whole array;
     with the actuated state (iii) it misses by the release per unit (2.8 % for state 110)."""
-    from design import forward_kinematics
+    from snapmorph.design import forward_kinematics
 
     L = three.length
     for row in three.rows:
@@ -213,9 +213,9 @@ def test_three_units_match_forward_kinematics_from_the_map():
     """The paper's three units (t 0.5, h 20, w 5, L 100 mm; b = 0, the maps' b/L): every
     state simulated whole vs forward kinematics from the default map (released state):
     within 0.1 % of the array length."""
-    from design import forward_kinematics
-    from design.array_study import all_array_states
-    from maps import DesignMap
+    from snapmorph.design import forward_kinematics
+    from snapmorph.design.array_study import all_array_states
+    from snapmorph.maps import DesignMap
 
     dm = DesignMap.load()
     units = paper_three_units(b=0.0)
@@ -259,7 +259,7 @@ def test_mixed_array(mixed, tmp_path):
     shapes = released_shapes(mixed.units, nodes=81)
     xy = fk_released(mixed.units, [True, False, True], shapes)
     assert curve_deviation(r.base, xy, mixed.length) < EXACT
-    from design.array_plots import plot_study
+    from snapmorph.design.array_plots import plot_study
 
     assert plot_study(mixed, tmp_path / "m.png").stat().st_size > 10_000
 

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from design.biarcs import Arc, arc_from_tangent, biarc, biarcs, sample_arcs
+from snapmorph.design.biarcs import Arc, arc_from_tangent, biarc, biarcs, sample_arcs
 
 
 def _check_biarc(p0, a0, p1, a1, first, second):

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from design import read_units_csv
-from design.units import read_placement
+from snapmorph.design import read_units_csv
+from snapmorph.design.units import read_placement
 from snapmorph.cli import main
 
 M_POINTS = "x_mm,y_mm\n0,0\n100,40\n200,15\n300,50\n400,0\n"

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from design import Unit
-from design.drawings import developed_length, split_pieces, write_drawings
+from snapmorph.design import Unit
+from snapmorph.design.drawings import developed_length, split_pieces, write_drawings
 
 T, W = 0.5e-3, 5e-3
 UNITS = [Unit(L=0.0726, h=0.0069, t=T, w=W, side=1),

@@ -33,7 +33,7 @@ def test_design_S(design_map, tmp_path):
     d = ex.run(design_map, out=tmp_path)
     arched = [u for u in d.units if not u.is_spacer]
     assert len(arched) == 8 and len(d.units) == 9
-    from design.lookup import MapLookup
+    from snapmorph.design.lookup import MapLookup
 
     u = arched[0]
     h_L = MapLookup(design_map).h_over_L_for_theta(45.0, u.t / u.L, u.w / u.L)
@@ -47,13 +47,13 @@ def test_design_M(design_map, tmp_path):
     d = ex.run(design_map, "paper", out=tmp_path)
     assert np.allclose(d.control_points[:, 0], [0.0, 0.1, 0.2, 0.4])
     assert d.max_deviation < 0.1
-    from design.paper import compare_M
+    from snapmorph.design.paper import compare_M
 
     assert "Table 3 L, h" in compare_M(d, design_map)
 
 
 def _committed_map():
-    from maps import DEFAULT_MAP, DesignMap
+    from snapmorph.maps import DEFAULT_MAP, DesignMap
 
     if not DEFAULT_MAP.exists():
         pytest.skip("the default design map has not been built yet (make maps)")
@@ -76,7 +76,7 @@ def test_examples_on_the_committed_map():
 
 def test_paper_figures(design_map, tmp_path):
     """The `make figures` hook writes the three figures and the M's and S's fabrication files."""
-    from design.paper import write_figures
+    from snapmorph.design.paper import write_figures
 
     paths = write_figures(tmp_path, design_map)
     for name in ("fk_states.png", "inverse_M.png", "inverse_S.png", "inverse_M/units.csv",

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from design import Unit, chain, inverse_design
-from design.lookup import MapLookup
-from design.paper import s_control_points
+from snapmorph.design import Unit, chain, inverse_design
+from snapmorph.design.lookup import MapLookup
+from snapmorph.design.paper import s_control_points
 
 # the synthetic map's energy barrier is h/L squared (not physical): no barrier margin here
 BARRIER = {"min_barrier": 0.0}

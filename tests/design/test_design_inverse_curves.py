@@ -13,10 +13,10 @@ import warnings
 import numpy as np
 import pytest
 
-from design import chain, inverse_design
-from design.inverse import verify_design
-from design.lookup import MapLookup, load_map
-from design.targets import Target, deviation, example_targets, place_rigid
+from snapmorph.design import chain, inverse_design
+from snapmorph.design.inverse import verify_design
+from snapmorph.design.lookup import MapLookup, load_map
+from snapmorph.design.targets import Target, deviation, example_targets, place_rigid
 
 T, W = 0.5e-3, 5e-3
 TARGETS = example_targets()

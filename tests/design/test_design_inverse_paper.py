@@ -8,9 +8,9 @@ import warnings
 import numpy as np
 import pytest
 
-from design import inverse_design
-from design.lookup import MapLookup, load_map
-from design.paper import (TABLE3_S, T, W, conventions, conventions_table, design_S_paper,
+from snapmorph.design import inverse_design
+from snapmorph.design.lookup import MapLookup, load_map
+from snapmorph.design.paper import (TABLE3_S, T, W, conventions, conventions_table, design_S_paper,
                           plot_conventions, s_control_points)
 
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import synthetic_map as sm
-from design import Unit, all_states, chain, forward_kinematics, parse_state
-from design.shapes import normalise_base, snapped_shape
+from snapmorph.design import Unit, all_states, chain, forward_kinematics, parse_state
+from snapmorph.design.shapes import normalise_base, snapped_shape
 
 T, W = 0.5e-3, 5e-3
 
@@ -121,7 +121,7 @@ def test_normalise_base():
 
 
 def _lookup(dm):
-    from design.lookup import MapLookup
+    from snapmorph.design.lookup import MapLookup
 
     return MapLookup(dm)
 
@@ -133,7 +133,7 @@ RELEASE_DEG = 5.0  # the test map's released units turn this much less
 @pytest.fixture(scope="module")
 def two_state_map(tmp_path_factory):
     """The synthetic map with a released state that turns RELEASE_DEG less (circular arcs)."""
-    from maps import DesignMap
+    from snapmorph.maps import DesignMap
 
     ds = sm.make_dataset()
     th = ds["theta"].values - RELEASE_DEG
@@ -176,7 +176,7 @@ def test_forward_kinematics_defaults_to_the_released_state(two_state_map):
 
 
 def test_lookup_state_and_theta_end(two_state_map):
-    from design.lookup import MapLookup
+    from snapmorph.design.lookup import MapLookup
 
     lk = MapLookup(two_state_map)
     th_r, _ = lk.theta_S(0.25, 0.005, 0.05)

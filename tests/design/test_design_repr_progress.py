@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from design import Unit, chain, inverse_design
-from design.lookup import MapLookup
-from solver import Structure
+from snapmorph.design import Unit, chain, inverse_design
+from snapmorph.design.lookup import MapLookup
+from snapmorph.solver import Structure
 
 T, W = 0.5e-3, 5e-3
 BARRIER = {"min_barrier": 0.0}  # the synthetic map's barrier is not physical

@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from design import Unit, forward_kinematics
-from design.lookup import MapLookup
-from design.shapes import snapped_shape
+from snapmorph.design import Unit, forward_kinematics
+from snapmorph.design.lookup import MapLookup
+from snapmorph.design.shapes import snapped_shape
 
 pytestmark = pytest.mark.slow
 
@@ -18,8 +18,8 @@ THETA_TOL_DEG, S_TOL = 0.5, 0.002
 
 @pytest.fixture(scope="module")
 def committed():
-    pytest.importorskip("solver.unit")
-    from maps import CI_MAP, DEFAULT_MAP, DesignMap
+    pytest.importorskip("snapmorph.units.planar")
+    from snapmorph.maps import CI_MAP, DEFAULT_MAP, DesignMap
 
     for path in (DEFAULT_MAP, CI_MAP):
         if path.exists():
@@ -30,8 +30,8 @@ def committed():
 @pytest.fixture(scope="module")
 def default_map():
     """The full default map: the accuracy targets are stated for it, not for the CI grid."""
-    pytest.importorskip("solver.unit")
-    from maps import DEFAULT_MAP, DesignMap
+    pytest.importorskip("snapmorph.units.planar")
+    from snapmorph.maps import DEFAULT_MAP, DesignMap
 
     if not DEFAULT_MAP.exists():
         pytest.skip("the default design map has not been built yet (make maps)")

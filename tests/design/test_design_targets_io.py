@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from design.target_io import read_target, svg_path_points
-from design.targets import (Target, best_rigid_placement, deviation, example_targets,
+from snapmorph.design.target_io import read_target, svg_path_points
+from snapmorph.design.targets import (Target, best_rigid_placement, deviation, example_targets,
                             place_rigid)
 
 

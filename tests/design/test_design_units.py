@@ -4,7 +4,7 @@ import csv
 
 import pytest
 
-from design import Unit, read_units_csv, spacer, write_units_csv
+from snapmorph.design import Unit, read_units_csv, spacer, write_units_csv
 
 
 def test_defaults_and_spacer():

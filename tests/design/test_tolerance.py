@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from design import Unit
-from design.tolerance import check_sigma, perturbed_units, tolerance
+from snapmorph.design import Unit
+from snapmorph.design.tolerance import check_sigma, perturbed_units, tolerance
 
 T, W = 0.5e-3, 5e-3
 THREE = [Unit(L=0.1, h=0.02, t=T, w=W, side=1)] * 3
@@ -21,7 +21,7 @@ def test_same_seed_same_result_and_nominal_inside(design_map):
     assert a.n_ok == 200 and np.all(a.p_bistable == 1.0)
     assert a.envelope_contains(a.nominal)
     # the nominal all-snapped shape is forward kinematics of the nominal units
-    from design import forward_kinematics
+    from snapmorph.design import forward_kinematics
 
     fk = forward_kinematics(THREE, "111", design_map=design_map)
     assert np.hypot(*(fk[-1] - a.nominal[-1])) < 1e-12
@@ -77,7 +77,7 @@ def test_perturbed_units_follow_the_draws():
 
 
 def test_plot_and_cli(tmp_path, synthetic_map_path, capsys):
-    from design.units import write_units_csv
+    from snapmorph.design.units import write_units_csv
     from snapmorph.cli import main
 
     csv = write_units_csv(THREE, tmp_path / "units.csv")
@@ -97,8 +97,8 @@ def test_plot_and_cli(tmp_path, synthetic_map_path, capsys):
 def test_envelope_contains_perturbed_whole_array_simulations():
     """50 randomly perturbed three-unit arrays (independent of the Monte Carlo's samples),
     each simulated whole (design.arrays, released): at least 95 % inside the envelope."""
-    from design.arrays import simulate_array
-    from maps import DesignMap
+    from snapmorph.design.arrays import simulate_array
+    from snapmorph.maps import DesignMap
 
     dm = DesignMap.load()
     units = [Unit(L=0.1, h=0.02, t=T, w=W, side=1, b=0.0)] * 3

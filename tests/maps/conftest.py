@@ -3,7 +3,7 @@
 import pytest
 
 from maps_synthetic import synthetic_dataset
-from pipeline.dataset import write_netcdf
+from snapmorph.pipeline.dataset import write_netcdf
 
 
 @pytest.fixture(scope="session")
@@ -15,6 +15,6 @@ def synthetic_path(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def dm(synthetic_path):
-    from maps import DesignMap
+    from snapmorph.maps import DesignMap
 
     return DesignMap.load(synthetic_path)

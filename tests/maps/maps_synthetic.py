@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
-from pipeline.batch import empty_block
-from pipeline.dataset import assemble, global_attrs
-from pipeline.grid import Grid
+from snapmorph.pipeline.batch import empty_block
+from snapmorph.pipeline.dataset import assemble, global_attrs
+from snapmorph.pipeline.grid import Grid
 
 GRID = Grid(h_over_L=tuple(round(0.05 * k, 10) for k in range(1, 11)),  # 0.05 .. 0.5
             t_over_L=(0.0025, 0.005, 0.0075, 0.01), w_over_L=(0.02, 0.05, 0.08), samples=17)

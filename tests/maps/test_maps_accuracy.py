@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from maps_synthetic import FAILED, F_cr, S, boundary, shape, theta
-from pipeline.accuracy import measure
+from snapmorph.pipeline.accuracy import measure
 
 
 def exact_solve(h, t, w, b, resolution, samples, bias=0.0):

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-import maps.designmap as designmap
+import snapmorph.maps.designmap as designmap
 from maps_synthetic import synthetic_dataset
-from maps import DesignMap, MapFileError
-from pipeline.dataset import write_netcdf
+from snapmorph.maps import DesignMap, MapFileError
+from snapmorph.pipeline.dataset import write_netcdf
 
 
 def test_load_reads_a_map(dm, synthetic_path):
@@ -91,8 +91,8 @@ def test_wrong_dimensions(tmp_path):
 
 
 def test_schema_1_maps_load_with_a_warning_and_answer_only_the_actuated_state(tmp_path):
-    from maps import MapDomainError, OldSchemaWarning
-    from pipeline.schema import OPTIONAL_VARS
+    from snapmorph.maps import MapDomainError, OldSchemaWarning
+    from snapmorph.pipeline.schema import OPTIONAL_VARS
 
     ds = synthetic_dataset().drop_vars([*OPTIONAL_VARS, "base_shape_released"])
     ds.attrs["schema_version"] = np.int32(1)

@@ -5,7 +5,7 @@ import pytest
 
 from maps_synthetic import (FAILED, GRID, H_STANDING, RELEASED_TURN, F_cr, S, S_released, boundary,
                             shape, theta, theta_released)
-from maps import MapDomainError
+from snapmorph.maps import MapDomainError
 
 rng = np.random.default_rng(42)
 

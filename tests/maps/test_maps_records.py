@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from pipeline.point import empty_record, finalise_record, model_options, solve_point
-from pipeline.schema import (FLOAT_VARS, OPTIONAL_VARS, RELEASED_VARS, SCHEMA_VERSION, SHAPE_VARS,
+from snapmorph.pipeline.point import empty_record, finalise_record, model_options, solve_point
+from snapmorph.pipeline.schema import (FLOAT_VARS, OPTIONAL_VARS, RELEASED_VARS, SCHEMA_VERSION, SHAPE_VARS,
                              STATUS_CODES)
 
 
@@ -25,7 +25,7 @@ def test_schema_2_knows_timeouts_and_unstable_second_states():
 
 
 def test_the_real_solver_fills_both_states(paper_point):
-    from units import UnitGeometry, simulate_unit
+    from snapmorph.units import UnitGeometry, simulate_unit
 
     rec = paper_point
     assert rec["status"] == 0 and rec["self_standing"] == 1

@@ -2,13 +2,13 @@
 
 import pytest
 
-from maps import CI_MAP, DesignMap
+from snapmorph.maps import CI_MAP, DesignMap
 from snapmorph.cli import main
 
 
 def test_ci_snapshot_is_a_valid_map():
     assert CI_MAP.is_file(), f"{CI_MAP} is missing: run `make maps-ci` and commit it"
-    from pipeline.schema import SCHEMA_VERSION
+    from snapmorph.pipeline.schema import SCHEMA_VERSION
 
     dm = DesignMap.load(CI_MAP)
     assert dm.attrs["grid"] == "ci"
@@ -36,7 +36,7 @@ def test_default_map_F_cr_is_smooth_along_h():
     h/L (its largest second difference relative to the value is 0.5 % today)."""
     import numpy as np
 
-    from maps import DEFAULT_MAP
+    from snapmorph.maps import DEFAULT_MAP
 
     dm = DesignMap.load(DEFAULT_MAP)
     F = dm.dataset.F_cr.transpose("h_over_L", ...).values

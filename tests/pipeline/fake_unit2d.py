@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 
-from pipeline.solvers import MapGrid, SolverSpec
+from snapmorph.pipeline.solvers import MapGrid, SolverSpec
 
 FAILED_POINT = (0.30, 0.01)
 

@@ -19,7 +19,7 @@ def fake_kind():
     unit's sources (solver/, units/) may change while a test runs in a shared work tree."""
     import dataclasses
 
-    from pipeline.solvers import get_spec
+    from snapmorph.pipeline.solvers import get_spec
 
     return dataclasses.replace(get_spec("unit"), sources=())
 

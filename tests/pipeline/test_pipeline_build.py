@@ -11,12 +11,12 @@ import xarray as xr
 import snapmorph
 from pipeline_testing import FAKE, assert_matches_fake
 import fake_unit_solver as fake
-from pipeline.batch import solve_batch
-from pipeline.build import build_map, open_checkpoint
-from pipeline.checkpoint import CheckpointError, checkpoint_dir
-from pipeline.compare import compare_maps
-from pipeline.grid import preset
-from pipeline.schema import FLAG_VARS, FLOAT_VARS, REQUIRED_ATTRS, SCHEMA_VERSION, STATUS_CODES
+from snapmorph.pipeline.batch import solve_batch
+from snapmorph.pipeline.build import build_map, open_checkpoint
+from snapmorph.pipeline.checkpoint import CheckpointError, checkpoint_dir
+from snapmorph.pipeline.compare import compare_maps
+from snapmorph.pipeline.grid import preset
+from snapmorph.pipeline.schema import FLAG_VARS, FLOAT_VARS, REQUIRED_ATTRS, SCHEMA_VERSION, STATUS_CODES
 
 CI = preset("ci")
 

@@ -12,12 +12,12 @@ import xarray as xr
 
 import fake_unit_solver as fake
 from pipeline_testing import FAKE, assert_matches_fake, fake_kind
-from pipeline.batch import solve_batch
-from pipeline.build import build_map, open_checkpoint
-from pipeline.checkpoint import checkpoint_dir
-from pipeline.fingerprint import block_checksum
-from pipeline.grid import preset
-from pipeline.solvers import get_spec
+from snapmorph.pipeline.batch import solve_batch
+from snapmorph.pipeline.build import build_map, open_checkpoint
+from snapmorph.pipeline.checkpoint import checkpoint_dir
+from snapmorph.pipeline.fingerprint import block_checksum
+from snapmorph.pipeline.grid import preset
+from snapmorph.pipeline.solvers import get_spec
 
 CI = preset("ci")
 COORDS = CI.points()
@@ -155,7 +155,7 @@ def test_identical_duplicate_is_harmless(reference, tmp_path, monkeypatch):
 
 def test_nothing_is_deleted_when_the_written_map_fails_its_check(tmp_path, monkeypatch):
     """The map is checked (here: a reader that refuses it) before the checkpoint is deleted."""
-    import pipeline.build as build
+    import snapmorph.pipeline.build as build
 
     out = tmp_path / "ci.nc"
     checkpointed(out)

@@ -7,8 +7,8 @@ import pytest
 import xarray as xr
 
 from pipeline_testing import FAKE, REPO
-from pipeline.dataset import write_netcdf
-from pipeline.schema import SCHEMA_VERSION
+from snapmorph.pipeline.dataset import write_netcdf
+from snapmorph.pipeline.schema import SCHEMA_VERSION
 from snapmorph.cli import main
 
 

@@ -1,4 +1,4 @@
-"""solve_point: normalisation of a UnitResult (via a stand-in `solver.unit`) and its error rules."""
+"""solve_point: normalisation of a UnitResult (via a stand-in `snapmorph.units.planar`) and its error rules."""
 
 import math
 import sys
@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from pipeline.point import E_REF, L_REF, finalise_record, resample_shape, solve_point
+from snapmorph.pipeline.point import E_REF, L_REF, finalise_record, resample_shape, solve_point
 
 
 @dataclass(frozen=True)
@@ -35,8 +35,8 @@ def arc(theta_deg, n, length=1.0, nonuniform=True):
 
 
 def make_unit_module(behaviour):
-    """A stand-in for solver.unit whose simulate_unit follows `behaviour(g, nodes)`."""
-    mod = types.ModuleType("solver.unit")
+    """A stand-in for snapmorph.units.planar whose simulate_unit follows `behaviour(g, nodes)`."""
+    mod = types.ModuleType("snapmorph.units.planar")
     mod.UnitGeometry = FakeGeometry
     mod.calls = []
 
@@ -65,7 +65,7 @@ def ok_result(g, nodes):
 def unit(monkeypatch):
     def install(behaviour):
         mod = make_unit_module(behaviour)
-        monkeypatch.setitem(sys.modules, "solver.unit", mod)
+        monkeypatch.setitem(sys.modules, "snapmorph.units.planar", mod)
         return mod
     return install
 

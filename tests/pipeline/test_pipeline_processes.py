@@ -12,10 +12,10 @@ import pytest
 import xarray as xr
 
 from pipeline_testing import FAKE, REPO, assert_matches_fake, fake_kind, subprocess_env
-from pipeline.build import build_map
-from pipeline.checkpoint import checkpoint_dir
-from pipeline.compare import compare_maps
-from pipeline.grid import preset
+from snapmorph.pipeline.build import build_map
+from snapmorph.pipeline.checkpoint import checkpoint_dir
+from snapmorph.pipeline.compare import compare_maps
+from snapmorph.pipeline.grid import preset
 
 CI = preset("ci")
 

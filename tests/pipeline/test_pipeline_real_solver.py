@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-unit = pytest.importorskip("solver.unit")
+unit = pytest.importorskip("snapmorph.units.planar")
 
-from pipeline.build import build_map  # noqa: E402
-from pipeline.grid import preset  # noqa: E402
-from pipeline.point import solve_point  # noqa: E402
+from snapmorph.pipeline.build import build_map  # noqa: E402
+from snapmorph.pipeline.grid import preset  # noqa: E402
+from snapmorph.pipeline.point import solve_point  # noqa: E402
 
 CI = preset("ci")
 

@@ -11,11 +11,11 @@ import xarray as xr
 
 import fake_unit_solver as fake
 from pipeline_testing import FAKE, REPO, assert_matches_fake, fake_kind, subprocess_env
-from pipeline.build import allowed_failures, build_map, parse_max_failed
-from pipeline.checkpoint import checkpoint_dir
-from pipeline.grid import preset
-from pipeline.schema import TIMEOUT
-from pipeline.solvers import get_spec
+from snapmorph.pipeline.build import allowed_failures, build_map, parse_max_failed
+from snapmorph.pipeline.checkpoint import checkpoint_dir
+from snapmorph.pipeline.grid import preset
+from snapmorph.pipeline.schema import TIMEOUT
+from snapmorph.pipeline.solvers import get_spec
 from snapmorph.cli import main
 
 CI = preset("ci")
@@ -84,7 +84,7 @@ FAKE_KIND = fake_kind()
 
 
 def test_unit_kind_hashes_the_model_source():
-    from pipeline.fingerprint import solver_modules, source_files
+    from snapmorph.pipeline.fingerprint import solver_modules, source_files
 
     names = {rel for rel, _ in source_files(solver_modules(get_spec("unit"), fake.solve))}
     assert {"solver/unit.py", "solver/continuation.py", "units/__init__.py", "units/geometry.py",
@@ -95,12 +95,12 @@ def test_unit_kind_hashes_the_model_source():
     for module in ("units/planar.py", "units/geometry.py", "solver/unit.py", "solver/unit_model.py"):
         tree = ast.parse((REPO / module).read_text())
         for node in ast.walk(tree):
-            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("units."):
-                assert node.module.replace(".", "/") + ".py" in names, (module, node.module)
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("snapmorph.units."):
+                assert node.module.removeprefix("snapmorph.").replace(".", "/") + ".py" in names, (module, node.module)
 
 
 def test_up_to_date_map_is_left_alone_and_force_rebuilds_the_same_bytes(tmp_path, monkeypatch):
-    import pipeline.build
+    import snapmorph.pipeline.build as build
 
     out = tmp_path / "ci.nc"
     build_map(CI, out, kind=FAKE_KIND, solve=FAKE, workers=2, progress=False)
@@ -122,7 +122,7 @@ def test_up_to_date_map_is_left_alone_and_force_rebuilds_the_same_bytes(tmp_path
     assert report.computed == CI.size and sha(out) != first
     build_map(CI, out, kind=FAKE_KIND, solve=FAKE, workers=1, progress=False, force=True)
     assert sha(out) == first
-    monkeypatch.setattr(pipeline.build, "source_hash", lambda modules: "0" * 64)
+    monkeypatch.setattr(build, "source_hash", lambda modules: "0" * 64)
     with pytest.warns(UserWarning, match="inputs differ .*solver_source_sha256"):
         report = build_map(CI, out, kind=FAKE_KIND, solve=FAKE, workers=1, progress=False)
     assert report.computed == CI.size
@@ -244,8 +244,8 @@ def test_committed_map_is_up_to_date(name):
     """`make maps` / `make maps-ci` leave the committed file alone only if its recorded inputs
     are this tree's: after a change to the solver, units, point.py, schema.py or dataset.py,
     rebuild them (`make maps maps-ci`) and commit the files."""
-    from pipeline.build import build_identity, read_map_identity
-    from pipeline.fingerprint import differences
+    from snapmorph.pipeline.build import build_identity, read_map_identity
+    from snapmorph.pipeline.fingerprint import differences
 
     path = REPO / "maps" / "data" / f"{name}.nc"
     recorded = read_map_identity(path)

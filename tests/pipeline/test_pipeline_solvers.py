@@ -7,10 +7,10 @@ import pytest
 import xarray as xr
 
 import fake_unit2d
-from pipeline.batch import solve_points
-from pipeline.build import build_map, open_checkpoint
-from pipeline.checkpoint import checkpoint_dir
-from pipeline.solvers import MapGrid, SolverSpec, get_spec, kinds, register
+from snapmorph.pipeline.batch import solve_points
+from snapmorph.pipeline.build import build_map, open_checkpoint
+from snapmorph.pipeline.checkpoint import checkpoint_dir
+from snapmorph.pipeline.solvers import MapGrid, SolverSpec, get_spec, kinds, register
 from snapmorph.cli import main
 
 KIND = "fake_unit2d:SPEC"

@@ -92,16 +92,16 @@ def inspected(monkeypatch):
 
 
 def _units():
-    from design import Unit
+    from snapmorph.design import Unit
 
     return [Unit(L=0.1, h=0.02, t=5e-4, w=5e-3, side=1), Unit(L=0.06, h=0.0, t=5e-4, w=5e-3),
             Unit(L=0.1, h=0.02, t=5e-4, w=5e-3, side=-1)]
 
 
 def test_fk_figures(tmp_path, inspected):
-    from design import all_states, chain
-    from design.lookup import MapLookup
-    from maps import DesignMap
+    from snapmorph.design import all_states, chain
+    from snapmorph.design.lookup import MapLookup
+    from snapmorph.maps import DesignMap
     from snapmorph.plotting.arrays import plot_fk_state, plot_fk_states
     from tests.design import synthetic_map
 
@@ -119,9 +119,9 @@ def test_fk_figures(tmp_path, inspected):
 
 
 def test_array_figures(tmp_path, inspected):
-    from design.array_plots import plot_result, plot_study
-    from design.array_study import run_study
-    from design.arrays import simulate_array
+    from snapmorph.design.array_plots import plot_result, plot_study
+    from snapmorph.design.array_study import run_study
+    from snapmorph.design.arrays import simulate_array
 
     units = _units()
     r = simulate_array(units, "100", nodes=41)
@@ -135,7 +135,7 @@ def test_array_figures(tmp_path, inspected):
 
 def test_unit_figure(tmp_path, inspected):
     from snapmorph.plotting.unit import plot_unit
-    from solver.unit import UnitGeometry, simulate_unit
+    from snapmorph.units import UnitGeometry, simulate_unit
 
     plot_unit(simulate_unit(UnitGeometry(L=0.1, h=0.02, t=5e-4, w=5e-3), nodes=61),
               tmp_path / "unit.png")

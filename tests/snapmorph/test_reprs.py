@@ -10,13 +10,13 @@ LIMIT = 400  # characters
 
 
 def _unit():
-    from design import Unit
+    from snapmorph.design import Unit
 
     return Unit(L=0.1, h=0.02, t=5e-4, w=5e-3)
 
 
 def _path():
-    from solver import Structure
+    from snapmorph.solver import Structure
 
     x = np.linspace(0, 0.1, 41)
     st = Structure()
@@ -28,7 +28,7 @@ def _path():
 
 
 def _rod():
-    from solver import Structure
+    from snapmorph.solver import Structure
 
     x = np.linspace(0, 0.1, 41)
     return Structure().add_rod(np.stack([x, 0 * x + 1e-3 * np.sin(np.pi * x / 0.1)], 1),
@@ -36,27 +36,27 @@ def _rod():
 
 
 def _unit_result():
-    from solver.unit import UnitGeometry, simulate_unit
+    from snapmorph.units import UnitGeometry, simulate_unit
 
     return simulate_unit(UnitGeometry(L=0.1, h=0.02, t=5e-4, w=5e-3), nodes=41)
 
 
 def _design_map(tmp_path):
-    from maps import DesignMap
+    from snapmorph.maps import DesignMap
     from tests.design import synthetic_map
 
     return DesignMap.load(synthetic_map.write(tmp_path / "s.nc"))
 
 
 def _chain(tmp_path):
-    from design import chain
-    from design.lookup import MapLookup
+    from snapmorph.design import chain
+    from snapmorph.design.lookup import MapLookup
 
     return chain([_unit(), _unit()], "11", lookup=MapLookup(_design_map(tmp_path)))
 
 
 def _array_result():
-    from design.arrays import simulate_array
+    from snapmorph.design.arrays import simulate_array
 
     return simulate_array([_unit(), _unit()], "10", nodes=41)
 

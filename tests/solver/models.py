@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from solver import Structure, reference_models
+from snapmorph.solver import Structure, reference_models
 
 
 def clamped_rod_nodes(n_nodes, length):

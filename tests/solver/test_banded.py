@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from solver.banded import band_to_dense, ldlt_factor, ldlt_solve
+from snapmorph.solver.banded import band_to_dense, ldlt_factor, ldlt_solve
 
 
 def _random_band(rng, n, bw, shift):
@@ -78,7 +78,7 @@ def test_envelope_heights_bound_the_fill_and_give_the_scanned_factor(rng):
     """Column extents computed once from the elements' DOFs (`envelope_heights`) hold every
     nonzero of the factor, fill included, and the factor and solves that use them equal the
     scanning ones; held DOFs (-1) are skipped."""
-    from solver.banded import (envelope_heights, ldlt_factor_envelope, ldlt_solve_envelope,
+    from snapmorph.solver.banded import (envelope_heights, ldlt_factor_envelope, ldlt_solve_envelope,
                                scanned_heights)
 
     n = 40

@@ -10,7 +10,7 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
-from solver import Structure
+from snapmorph.solver import Structure
 
 L, T, W, E = 0.1, 0.5e-3, 5e-3, 2.2e9
 EI = E * W * T**3 / 12

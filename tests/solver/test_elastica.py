@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from solver import Structure
+from snapmorph.solver import Structure
 from tests.solver.models import clamped_rod_nodes
 
 L, T, W = 1.0, 5e-4, 1e-2

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from solver import Structure
-from solver.energies import bending_terms, curvature_terms, spring_terms, stretch_terms
+from snapmorph.solver import Structure
+from snapmorph.solver.energies import bending_terms, curvature_terms, spring_terms, stretch_terms
 
 
 def fd_gradient(fun, x, h=1e-7):

@@ -8,7 +8,7 @@ exact functions of the state between accepted states, so the checks hold anywher
 import numpy as np
 import pytest
 
-from solver.energies3d import (
+from snapmorph.solver.energies3d import (
     bending_terms,
     chain_pair,
     material_curvature,
@@ -20,7 +20,7 @@ from solver.energies3d import (
     twist_angle,
     twist_terms,
 )
-from solver.frames3d import (
+from snapmorph.solver.frames3d import (
     material_directors,
     material_frame_jet,
     parallel_transport,

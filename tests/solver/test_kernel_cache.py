@@ -1,7 +1,7 @@
 """The kernel-cache guard: cached kernels go when any source of the package changes."""
 
-import solver
-from solver.kernel_cache import STAMP, discard_stale_kernels, sources_digest
+from snapmorph import solver
+from snapmorph.solver.kernel_cache import STAMP, discard_stale_kernels, sources_digest
 
 
 def _package(tmp_path):

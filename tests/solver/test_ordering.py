@@ -5,7 +5,7 @@ import numpy as np
 import scipy.sparse
 import scipy.sparse.csgraph
 
-from solver.ordering import cuthill_mckee, envelope_cost, envelope_order
+from snapmorph.solver.ordering import cuthill_mckee, envelope_cost, envelope_order
 
 
 def _ring_with_spokes(n_ring=60, n_spokes=6):
@@ -72,8 +72,8 @@ def test_the_3d_unit_factorises_a_small_envelope():
     """The frame unit's ordering: the factorisation's work (column heights to the last row
     reaching them, fill included) is a small part of the band's n bw^2 / 2 (measured 0.6 M
     against 3.2 M at 41 nodes; scipy's RCM order gave 3.1 M in a band of 192)."""
-    from units.frame3d import UnitGeometry
-    from units.unit3d import build_unit_3d
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.unit3d import build_unit_3d
 
     st = build_unit_3d(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3)).structure
     sysm = st.reduced_system()

@@ -18,7 +18,7 @@ import sys
 import numpy as np
 import pytest
 
-from solver import Structure
+from snapmorph.solver import Structure
 from tests.solver.models import first_peak_index
 
 T, L_SPAN, W, E = 0.5e-3, 0.1, 5e-3, 2.2e9
@@ -253,7 +253,7 @@ def test_a_wandering_path_ends_with_a_status_that_says_so(monkeypatch):
     # Without the check that a backward branch restabilises, MGDC wanders as in issue 12
     # (d back and forth between 0.1 h and 1.9 h with the force growing without bound);
     # the wandering guard stops it with a status that says so instead of "ok".
-    from solver.branching import BranchMonitor
+    from snapmorph.solver.branching import BranchMonitor
 
     monkeypatch.setattr(BranchMonitor, "excursion_verdict", lambda self, new: None)
     st, mid, h, EI = arch(20, 101, "fix", centre=False)
@@ -313,7 +313,7 @@ def test_euler_column_with_clamps(method):
 
 @pytest.mark.slow
 def test_unit_at_three_heights_mgdc_and_displacement_control_agree():
-    from solver.unit import UnitGeometry, simulate_unit
+    from snapmorph.units import UnitGeometry, simulate_unit
 
     for h in (0.015, 0.02, 0.025):
         g = UnitGeometry(L=0.1, h=h, t=0.5e-3, w=5e-3, b=5e-3)
@@ -510,7 +510,7 @@ def _work_gaps(path, structure):
 
 
 def test_work_mismatch_is_zero_on_a_quadratic_energy_and_flags_a_jump():
-    from solver.continuation import _work_mismatch
+    from snapmorph.solver.continuation import _work_mismatch
 
     # E = k d^2 / 2, F = k d: the trapezoid is exact
     k, d0, d1 = 3.0e3, 1e-3, 1.5e-3
@@ -526,7 +526,7 @@ def test_work_mismatch_is_zero_on_a_quadratic_energy_and_flags_a_jump():
 def test_a_step_that_gains_energy_however_small_ends_with_a_status_that_says_so(monkeypatch):
     # Were every step to gain energy beyond the work of the push (as the jump to a far
     # equilibrium did on the 401-node arch), the path must stop with a status saying so.
-    import solver.continuation as cont
+    import snapmorph.solver.continuation as cont
 
     monkeypatch.setattr(cont, "_work_mismatch", lambda *a: (1.0, False))
     st, mid, h, EI = arch(10, 101, "fix", centre=False)

@@ -15,15 +15,15 @@ Reference cases:
 import numpy as np
 import pytest
 
-from solver import Structure, reference_models
-from solver.stability import (
+from snapmorph.solver import Structure, reference_models
+from snapmorph.solver.stability import (
     StateStability,
     eigenmodes,
     held_count,
     seed_imperfection,
     state_stability,
 )
-from solver.unit import UnitGeometry, simulate_unit
+from snapmorph.units import UnitGeometry, simulate_unit
 from tests.solver.models import clamped_arch, first_peak_index
 from tests.solver.test_column import P_CR, column
 
@@ -280,8 +280,8 @@ def test_refine_maximum_finds_the_vertex_and_refuses_a_branch_jump():
     solve of the search had converged on another equilibrium and its force was taken as
     the maximum. A solve far off the samples' line now abandons the search (the callers fall
     back to the samples' parabola)."""
-    from solver.continuation import ConvergenceError
-    from solver.states import refine_maximum
+    from snapmorph.solver.continuation import ConvergenceError
+    from snapmorph.solver.states import refine_maximum
 
     d = np.array([0.0, 0.2, 0.4, 0.6])
     F = 1.0 - (d - 0.3) ** 2
@@ -298,10 +298,10 @@ def test_displacement_probe_marches_in_substeps_when_newton_fails():
     back to the samples' parabola, so F_cr depended on the path's sampling (0.48507 and
     0.48540 N for two Newton tolerances of the push). Marching the held displacement in
     substeps converges, and the search then gives one F_cr for both samplings."""
-    from solver.states import refine_maximum
-    from units.frame3d import UnitGeometry
-    from units.push3d import _probe, path_states, snap_crossings
-    from units.unit3d import build_unit_3d
+    from snapmorph.solver.states import refine_maximum
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.push3d import _probe, path_states, snap_crossings
+    from snapmorph.units.unit3d import build_unit_3d
 
     g = UnitGeometry(L=0.1, h=0.0091, t=0.5e-3, w=5e-3, b=5e-3)
     m = build_unit_3d(g)

@@ -6,8 +6,8 @@ import time
 import numpy as np
 import pytest
 
-from solver.unit import UnitGeometry, simulate_unit
-from solver.unit_model import DEFAULT_NODES, build_unit
+from snapmorph.units import UnitGeometry, simulate_unit
+from snapmorph.units.geometry import DEFAULT_NODES, build_unit
 
 MM = 1e-3
 SPECIMEN = UnitGeometry(L=99.5 * MM, h=19.24 * MM, t=0.5 * MM, w=5 * MM, b=5 * MM)
@@ -228,7 +228,7 @@ def test_released_state_is_a_free_equilibrium(specimen):
 def test_F_cr_is_the_exact_force_maximum(specimen):
     """F_cr is located by displacement-controlled solves: no path sample exceeds it, and a
     dense scan of F(d) under displacement control around d_cr peaks at the same value."""
-    from solver.states import DisplacementProbe
+    from snapmorph.solver.states import DisplacementProbe
 
     d, F = specimen.curve
     assert F.max() <= specimen.F_cr * (1 + 1e-12)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from solver import ConvergenceError, Structure
+from snapmorph.solver import ConvergenceError, Structure
 
 XZ = np.stack([np.linspace(0, 0.1, 11), np.zeros(11)], 1)
 

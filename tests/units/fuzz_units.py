@@ -31,7 +31,7 @@ PREFIXES = ("ok", "monostable", "second state unstable", "timeout", "not converg
 
 def random_geometry(rng):
     """Keyword arguments of one valid UnitGeometry (retries until valid)."""
-    from units.geometry import (MIN_FLAT_FRACTION, MIN_SECTION_FRACTION, MIN_SPAN_FRACTION,
+    from snapmorph.units.geometry import (MIN_FLAT_FRACTION, MIN_SECTION_FRACTION, MIN_SPAN_FRACTION,
                                 MIN_WIDTH_FRACTION, geometry_problem)
 
     while True:
@@ -55,10 +55,10 @@ def random_geometry(rng):
 
 def check_one(kw, time_limit, nodes):
     """Simulate one geometry; returns (problems list, status prefix, seconds)."""
-    from solver.stability import state_stability
-    from units import UnitGeometry, simulate_unit
-    from units.geometry import build_unit
-    from units.planar import E_INTERNAL, L_INTERNAL
+    from snapmorph.solver.stability import state_stability
+    from snapmorph.units import UnitGeometry, simulate_unit
+    from snapmorph.units.geometry import build_unit
+    from snapmorph.units.planar import E_INTERNAL, L_INTERNAL
 
     g = UnitGeometry(**kw)
     t0 = time.perf_counter()

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from unit_checks import make_second_state_unstable
-from units import UnitGeometry, simulate_unit
-from units.geometry import build_unit
-from units.planar import STATUS_CODES, _zero_crossings
+from snapmorph.units import UnitGeometry, simulate_unit
+from snapmorph.units.geometry import build_unit
+from snapmorph.units.planar import STATUS_CODES, _zero_crossings
 
 MM = 1e-3
 PAPER = dict(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3)
@@ -155,7 +155,7 @@ def test_an_unstable_second_state_is_reported_as_such(monkeypatch):
     """No geometry found after the issue-12 driver rework keeps a state (iii) with negative
     eigenvalues, so the reporting is checked by making the stability check of state (iii)
     see two: the unit must then be "second state unstable", not bistable, with no S or θ."""
-    import units.planar as planar
+    import snapmorph.units.planar as planar
 
     make_second_state_unstable(monkeypatch, planar)
     r = simulate_unit(UnitGeometry(**PAPER), critical=False, check_self_standing=False)
@@ -276,7 +276,7 @@ def test_bad_simulation_arguments_are_refused(kw, match):
 
 def _thinnest(L, h, w, b=0.0):
     """The smallest valid t: the arch rod's length / MAX_SLENDERNESS."""
-    from units.geometry import MAX_SLENDERNESS
+    from snapmorph.units.geometry import MAX_SLENDERNESS
 
     g = UnitGeometry(L=L, h=h, t=1e-3, w=w, b=b)
     return (g.arch_length + 2 * (b + w)) / MAX_SLENDERNESS * (1 + 1e-9)

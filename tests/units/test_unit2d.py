@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from unit_checks import assert_supports_hold_only_rigid_motion
-from units.frame3d import UnitGeometry
-from units.unit2d import SIDES, build_unit_mesh_2d, edge_metrics
+from snapmorph.units.frame3d import UnitGeometry
+from snapmorph.units.unit2d import SIDES, build_unit_mesh_2d, edge_metrics
 
 G = UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3)
 
@@ -148,7 +148,7 @@ def test_overlaps_are_one_edge_of_fixed_length_whatever_the_mesh(nodes):
 def test_rigid_overlaps_are_thick_edges_over_the_w_by_w_squares():
     m = build_unit_mesh_2d(G40, nodes=81, overlaps="rigid")
     X = m.mesh.positions
-    from units.unit2d import RIGID_OVERLAP_THICKNESS
+    from snapmorph.units.unit2d import RIGID_OVERLAP_THICKNESS
 
     thick = RIGID_OVERLAP_THICKNESS * G40.t
     for rod in m.mesh.rods:
@@ -173,7 +173,7 @@ def test_rigid_overlaps_are_thick_edges_over_the_w_by_w_squares():
 # --------------------------------------------------------------------------- with the solver
 def _solver():
     try:
-        from solver import Structure3D  # noqa: F401
+        from snapmorph.solver import Structure3D  # noqa: F401
     except ImportError:  # pragma: no cover
         pytest.skip("solver.Structure3D is not available")
 
@@ -184,7 +184,7 @@ G40 = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
 @pytest.fixture(scope="module")
 def tall21():
     _solver()
-    from units.unit2d import simulate_unit_2d
+    from snapmorph.units.unit2d import simulate_unit_2d
 
     return simulate_unit_2d(G40, nodes=21)
 
@@ -236,7 +236,7 @@ def test_tall_2d_unit_released_state(tall21):
 
 
 def test_released_supports_hold_only_rigid_motion():
-    from units.unit2d import released_supports_2d
+    from snapmorph.units.unit2d import released_supports_2d
 
     free = build_unit_mesh_2d(G, nodes=21, actuator=False, supports=False)
     act = build_unit_mesh_2d(G, nodes=21)
@@ -248,7 +248,7 @@ def test_released_supports_hold_only_rigid_motion():
 
 def test_low_2d_unit_is_monostable():
     _solver()
-    from units.unit2d import simulate_unit_2d
+    from snapmorph.units.unit2d import simulate_unit_2d
 
     r = simulate_unit_2d(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3), nodes=21)
     assert r.status == "monostable" and not r.bistable and r.F_cr > 0
@@ -261,9 +261,9 @@ def test_an_unstable_second_state_is_reported_as_such(monkeypatch):
     """The stability check of (iii) made to see two negative eigenvalues: not bistable,
     status "second state unstable", no edge metrics of (iii), map status 5."""
     _solver()
-    from solver.stability import StateStability
-    from units import push3d
-    from units.unit2d import simulate_unit_2d, solve_map_point
+    from snapmorph.solver.stability import StateStability
+    from snapmorph.units import push3d
+    from snapmorph.units.unit2d import simulate_unit_2d, solve_map_point
 
     real = push3d._state_stability
 
@@ -286,14 +286,14 @@ def test_an_unstable_second_state_is_reported_as_such(monkeypatch):
     (dict(nu="x"), "nu"), (dict(nu=True), "nu"),
 ])
 def test_simulate_bad_input_names_the_parameter(kwargs, name):
-    from units.unit2d import simulate_unit_2d
+    from snapmorph.units.unit2d import simulate_unit_2d
 
     with pytest.raises(ValueError, match=name):
         simulate_unit_2d(G40, **kwargs)
 
 
 def test_map_point_is_dimensionless_and_never_raises(tall21):
-    from units.unit2d import solve_map_point
+    from snapmorph.units.unit2d import solve_map_point
 
     rec = solve_map_point(0.4, 0.005, resolution=21)
     EI = G40.E * G40.w * G40.t**3 / 12
@@ -307,7 +307,7 @@ def test_map_point_is_dimensionless_and_never_raises(tall21):
     assert rec["edge_theta_released"] == pytest.approx(
         [tall21.released["edges"][s]["theta_deg"] for s in SIDES])
     assert rec["theta_spread_released"] > 10.0
-    from units.unit2d import MAP_SPEC
+    from snapmorph.units.unit2d import MAP_SPEC
 
     clean = MAP_SPEC.finalise_record(rec, MAP_SPEC.options)
     assert clean["status"] == 0 and clean["self_standing"] == 1
@@ -339,7 +339,7 @@ def test_released_warp_converges_with_the_mesh():
     1.2511 N): second order, the differences falling ~4x per halving. With joints coupling
     edges of the mesh spacing it was 41.6 / 61.7 / 72.2 / 77.5 deg at 21 / 41 / 81 / 161."""
     _solver()
-    from units.unit2d import simulate_unit_2d
+    from snapmorph.units.unit2d import simulate_unit_2d
 
     curled, flat, S, F = [], [], [], []
     for nodes in (21, 41, 81):
@@ -362,7 +362,7 @@ def test_rigid_overlaps_option():
     F_cr 1.3324 N against 1.2505, theta in (iii) 16.04 deg against 13.79), the released warp
     alike (61.6 / -5.5 deg)."""
     _solver()
-    from units.unit2d import simulate_unit_2d
+    from snapmorph.units.unit2d import simulate_unit_2d
 
     r = simulate_unit_2d(G40, nodes=41, overlaps="rigid")
     assert r.status == "ok" and r.bistable and r.self_standing is True
@@ -377,7 +377,7 @@ def test_2d_unit_mesh_convergence_within_one_percent():
     """Default mesh (41 nodes per side) against 81: F_cr 1.2505 / 1.2511 N (0.05 %), theta of
     the sides 13.79 / 13.89 deg, d_second 65.10 / 65.24 mm (measured)."""
     _solver()
-    from units.unit2d import DEFAULT_NODES_2D, simulate_unit_2d
+    from snapmorph.units.unit2d import DEFAULT_NODES_2D, simulate_unit_2d
 
     coarse = simulate_unit_2d(G40, nodes=DEFAULT_NODES_2D, check_self_standing=False)
     fine = simulate_unit_2d(G40, nodes=2 * DEFAULT_NODES_2D - 1, check_self_standing=False)
@@ -391,7 +391,7 @@ def test_a_shallow_dip_strided_over_by_the_steps_is_refined():
     samples that are both above zero (0.066 and 0.051 N at d = 56.2 and 63.6 mm with the
     units' step size). Refining the sampled minimum by displacement-controlled solves finds
     the dip, hence states (ii) and (iii) 4 mm apart; without it the unit read monostable."""
-    from units.unit2d import simulate_unit_2d
+    from snapmorph.units.unit2d import simulate_unit_2d
 
     g = UnitGeometry(L=0.1, h=0.04, t=0.75e-3, w=5e-3)
     r = simulate_unit_2d(g, check_self_standing=False)

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from unit_checks import assert_supports_hold_only_rigid_motion, make_second_state_unstable
-from units.frame3d import UnitGeometry, end_tangent_angle
-from units.planar import simulate_unit
-from units.unit3d import (
+from snapmorph.units.frame3d import UnitGeometry, end_tangent_angle
+from snapmorph.units.planar import simulate_unit
+from snapmorph.units.unit3d import (
     STIFF_PLATE_FACTOR,
     arch_lean_deg,
     build_unit_3d,
@@ -291,7 +291,7 @@ def test_section_rotation_and_end_tangent_angle_closed_forms():
 # --------------------------------------------------------------------------- with the solver
 def _solver():
     try:
-        from solver import Structure3D  # noqa: F401
+        from snapmorph.solver import Structure3D  # noqa: F401
     except ImportError:  # pragma: no cover - before issue 13 lands
         pytest.skip("solver.Structure3D is not available")
 
@@ -299,7 +299,7 @@ def _solver():
 @pytest.fixture(scope="module")
 def perfect21():
     _solver()
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     return simulate_unit_3d(SPECIMEN, nodes=21)
 
@@ -320,7 +320,7 @@ def test_perfect_unit_snaps_in_its_plane(perfect21):
 
 
 def test_identical_inputs_give_identical_outputs(perfect21):
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     again = simulate_unit_3d(SPECIMEN, nodes=21)
     assert np.array_equal(again.curve[0], perfect21.curve[0])
@@ -329,7 +329,7 @@ def test_identical_inputs_give_identical_outputs(perfect21):
 
 
 def test_tilt_knocks_down_F_cr_and_is_mirror_symmetric(perfect21):
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     plus = simulate_unit_3d(SPECIMEN, nodes=21, tilt_deg=5.0)
     minus = simulate_unit_3d(SPECIMEN, nodes=21, tilt_deg=-5.0)
@@ -350,8 +350,8 @@ def test_stiff_end_plates_reproduce_the_planar_model():
     assumption) the 3-D unit agrees with the planar model (issue 14: 3 % in F_cr, 1 deg in
     theta; measured -2.2 % and +0.8 deg at 81 nodes)."""
     _solver()
-    from solver.unit import simulate_unit
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units import simulate_unit
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     g = UnitGeometry(L=99.5 * MM, h=19.24 * MM, t=0.5 * MM, w=5 * MM, b=5 * MM)
     planar = simulate_unit(g)
@@ -367,7 +367,7 @@ def test_elastic_end_plates_lower_F_cr_by_bending_near_the_bond():
     next to the bond, which lowers F_cr by ~15 % (measured at 41 and 81 nodes: -15.4 %,
     -16.6 %); stiffening the plates removes it."""
     _solver()
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     g = UnitGeometry(L=99.5 * MM, h=19.24 * MM, t=0.5 * MM, w=5 * MM, b=5 * MM)
     elastic = simulate_unit_3d(g, nodes=41)
@@ -414,8 +414,8 @@ SNAP_BACK_F = np.array([0.0, 1.0, -1.0, -0.5, 0.5, -0.5, 1.0])
 
 
 def test_zero_crossings_are_classified_by_slope_on_a_path_that_snaps_back():
-    import units.planar as planar
-    from units import push3d
+    import snapmorph.units.planar as planar
+    from snapmorph.units import push3d
 
     # one rule for every unit: push3d uses the planar unit's helpers, no copies of its own
     assert push3d._zero_crossings is planar._zero_crossings
@@ -465,8 +465,8 @@ class _ReplayStructure:
 
 
 def test_push_through_finds_the_second_state_of_a_path_that_snaps_back(monkeypatch):
-    from solver.stability import StateStability
-    from units import push3d
+    from snapmorph.solver.stability import StateStability
+    from snapmorph.units import push3d
 
     monkeypatch.setattr(push3d, "_state_stability",
                         lambda st, q, node, system: StateStability(0, 0))
@@ -478,7 +478,7 @@ def test_push_through_finds_the_second_state_of_a_path_that_snaps_back(monkeypat
 
 
 def test_released_model_shares_the_rods_and_its_supports_hold_only_rigid_motion():
-    from units.unit3d import released_supports
+    from snapmorph.units.unit3d import released_supports
 
     act = build_unit_mesh_3d(SPECIMEN, nodes=41)
     free = build_unit_mesh_3d(SPECIMEN, nodes=41, actuator=False, supports=False)
@@ -514,7 +514,7 @@ def test_released_state_does_not_depend_on_where_the_actuator_was(perfect21):
     changes the actuated theta by 0.83 deg, the released one by 0.08 deg (measured at 21
     nodes; 0.74 and 0.01 deg at 41): what is left is the mesh, which differs a little (the
     arch is meshed around the actuator)."""
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     off = simulate_unit_3d(SPECIMEN, nodes=21, actuator_offset=4 * MM)
     assert off.bistable and off.self_standing
@@ -532,8 +532,8 @@ def test_released_state_against_the_planar_model():
     one (its elastic end plates, see test_elastic_end_plates_lower_F_cr...): the comparison
     is of what releasing changes."""
     _solver()
-    from units.planar import simulate_unit
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.planar import simulate_unit
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     r = simulate_unit_3d(SPECIMEN)
     p = simulate_unit(SPECIMEN)
@@ -550,8 +550,8 @@ def test_released_state_of_the_tall_unit():
     """h = 40 mm (measured: 3-D theta 129.08 -> 128.20 deg, S 80.49 -> 80.81 mm; planar
     121.85 -> 120.15 deg, 80.24 -> 80.56 mm)."""
     _solver()
-    from units.planar import simulate_unit
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.planar import simulate_unit
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3, b=5e-3)
     r = simulate_unit_3d(g)
@@ -564,7 +564,7 @@ def test_released_state_of_the_tall_unit():
 
 def test_tilted_unit_released_state_is_mirror_symmetric_in_the_tilt():
     _solver()
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     plus = simulate_unit_3d(SPECIMEN, nodes=21, tilt_deg=5.0)
     minus = simulate_unit_3d(SPECIMEN, nodes=21, tilt_deg=-5.0)
@@ -579,8 +579,8 @@ def test_an_unstable_second_state_is_reported_as_such(monkeypatch):
     """No 3-D geometry found keeps a state (iii) with negative eigenvalues, so the report is
     checked by making the stability check of (iii) see two (the planar unit's test)."""
     _solver()
-    from units import push3d
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units import push3d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     make_second_state_unstable(monkeypatch, push3d)
     r = simulate_unit_3d(SPECIMEN, nodes=21)
@@ -596,7 +596,7 @@ def test_an_unstable_second_state_is_reported_as_such(monkeypatch):
     (dict(tilt_deg=90.0), "tilt_deg"), (dict(nu="x"), "nu"),
 ])
 def test_simulate_bad_input_names_the_parameter(kwargs, name):
-    from units.unit3d import simulate_unit_3d
+    from snapmorph.units.unit3d import simulate_unit_3d
 
     with pytest.raises(ValueError, match=name):
         simulate_unit_3d(SPECIMEN, **kwargs)

@@ -24,7 +24,7 @@ def make_second_state_unstable(monkeypatch, module):
     """Let ``module._state_stability`` report two negative eigenvalues at its second call,
     state (iii) (the first, state (ii), stays real): no geometry found keeps an unstable
     state (iii), so this is how its reporting is tested."""
-    from solver.stability import StateStability
+    from snapmorph.solver.stability import StateStability
 
     real = module._state_stability
     calls = []

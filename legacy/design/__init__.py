@@ -1,0 +1,5 @@
+"""Deprecated import name: `design` is `snapmorph.design` (see _snapmorph_legacy)."""
+
+from _snapmorph_legacy import alias_old_name
+
+alias_old_name(__name__)

@@ -1,0 +1,5 @@
+"""Deprecated import name: `maps` is `snapmorph.maps` (see _snapmorph_legacy)."""
+
+from _snapmorph_legacy import alias_old_name
+
+alias_old_name(__name__)
