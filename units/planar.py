@@ -39,13 +39,13 @@ import inspect
 from snapmorph.solver.continuation import ConvergenceError
 from snapmorph.solver.stability import state_stability
 from snapmorph.solver.states import DisplacementProbe, refine_maximum, zero_force_displacement
+from snapmorph.units import status as statuses
 from snapmorph.units.geometry import DEFAULT_NODES, PETG_E, UnitGeometry, build_unit, check_nodes, check_real
 
 __all__ = ["UnitGeometry", "UnitResult", "simulate_unit", "STATUS_CODES", "DEFAULT_NODES"]
 
-#: status -> design-map status code (`pipeline.schema.STATUS_CODES` holds the same codes)
-STATUS_CODES = {"ok": 0, "monostable": 1, "not_converged": 2, "invalid_geometry": 3,
-                "timeout": 4, "second_state_unstable": 5}
+#: status -> design-map status code (`units.status`, without "pending")
+STATUS_CODES = {name: code for name, code in statuses.CODE.items() if code >= 0}
 NAN = float("nan")
 #: the reference unit every simulation is solved at (results are scaled back)
 L_INTERNAL = 0.1  # m
@@ -108,13 +108,7 @@ class UnitResult(ReleasedMetrics):
     def status_code(self) -> int:
         """The design-map code of ``status``: 0 ok, 1 monostable, 2 not converged,
         3 invalid geometry, 4 timeout, 5 second state unstable."""
-        if self.status in STATUS_CODES:
-            return STATUS_CODES[self.status]
-        if self.status.startswith("timeout"):
-            return STATUS_CODES["timeout"]
-        if self.status.startswith("second state unstable"):
-            return STATUS_CODES["second_state_unstable"]
-        return STATUS_CODES["not_converged"]
+        return statuses.status_code(self.status)
 
     def summary(self) -> dict:
         """The scalar metrics as a plain dict (SI)."""
