@@ -23,10 +23,11 @@ def paper():
 
 # ------------------------------------------------------------------ the move to units/
 def test_old_import_paths_are_the_same_objects():
-    import solver.unit
-    import solver.unit_model
-    import units.geometry
-    import units.planar
+    with pytest.warns(DeprecationWarning, match="deprecated import name"):
+        import solver.unit
+        import solver.unit_model
+        import units.geometry
+        import units.planar
 
     assert solver.unit.simulate_unit is units.planar.simulate_unit
     assert solver.unit.UnitGeometry is units.geometry.UnitGeometry
