@@ -22,7 +22,8 @@ import warnings
 OLD_PACKAGES = {name: f"snapmorph.{name}" for name in ("solver", "units", "pipeline", "maps", "design")}
 
 #: old modules that moved elsewhere than snapmorph.<old name>
-MOVED = {"solver.unit": "snapmorph.units.planar", "solver.unit_model": "snapmorph.units.geometry"}
+MOVED = {"solver.unit": "snapmorph.units.planar", "solver.unit_model": "snapmorph.units.geometry",
+         "design.tolerance": "snapmorph.design.fabrication_tolerance"}
 
 
 def new_name(old: str) -> str | None:

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from snapmorph.design import chain, inverse_design
-from snapmorph.design.inverse import verify_design
+from snapmorph.design.verification import verify_design
 from snapmorph.design.lookup import MapLookup, load_map
 from snapmorph.design.targets import Target, deviation, example_targets, place_rigid
 

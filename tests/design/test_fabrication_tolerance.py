@@ -1,5 +1,6 @@
-"""design.tolerance: Monte Carlo of fabrication errors through the map, and its envelope
-checked against whole-array simulations of randomly perturbed arrays."""
+"""design.fabrication_tolerance (the function `design.tolerance`): Monte Carlo of fabrication
+errors through the map, and its envelope checked against whole-array simulations of randomly
+perturbed arrays."""
 
 import math
 
@@ -7,7 +8,7 @@ import numpy as np
 import pytest
 
 from snapmorph.design import Unit
-from snapmorph.design.tolerance import check_sigma, perturbed_units, tolerance
+from snapmorph.design.fabrication_tolerance import check_sigma, perturbed_units, tolerance
 
 T, W = 0.5e-3, 5e-3
 THREE = [Unit(L=0.1, h=0.02, t=T, w=W, side=1)] * 3
