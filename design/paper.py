@@ -171,6 +171,26 @@ def write_figures(out, design_map=None) -> list[Path]:
     return paths
 
 
+# --- the scripts in examples/ -----------------------------------------------------------------------
+def example_parser(doc: str, out: str):
+    """The command line of an example script: --map and --out (default `out`); `doc`'s first
+    line is its description."""
+    import argparse
+
+    p = argparse.ArgumentParser(description=doc.splitlines()[0])
+    p.add_argument("--map", default=None, help="design map (default: the committed one)")
+    p.add_argument("--out", default=out)
+    return p
+
+
+def written(design, out=None):
+    """`design`, after writing units.csv, design.png and the drawings (a 600 mm laser bed)
+    into `out` when given."""
+    if out is not None:
+        design.write(out, bed_length_mm=600.0)
+    return design
+
+
 # --- the paper's angle convention (issue 11, item 4) ------------------------------------------
 def design_S_paper(design_map=None, **shape):
     """The S designed as the paper did: one unit per circular segment, entering the map with

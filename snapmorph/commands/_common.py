@@ -165,6 +165,16 @@ def typed_name(args, dest: str, new: str) -> str:
     return getattr(args, "typed_names", {}).get(dest, new)
 
 
+def add_shape_options(p, *, plot: str, csv: str, overlay: str, start: str) -> None:
+    """--plot, --csv, --overlay TARGET_CSV and --no-placement of the array commands (fk, array):
+    help texts `plot`, `csv`, `overlay`, and where the array `start`s without its placement."""
+    p.add_argument("--plot", default=None, help=plot)
+    p.add_argument("--csv", default=None, help=csv)
+    p.add_argument("--overlay", default=None, metavar="TARGET_CSV", help=overlay)
+    p.add_argument("--no-placement", action="store_true",
+                   help=f"ignore units.csv's placement line: {start}")
+
+
 def add_snapped_option(p, what: str) -> None:
     """--snapped PATTERN (snapmorph 0.1: --state), a snap pattern: one character per unit."""
     add_renamed_option(p, "--snapped", "--state", default=None, metavar="PATTERN",
@@ -290,6 +300,20 @@ def add_result_files(p, plot_help: str) -> None:
     """--plot PNG and --json FILE of a unit command."""
     p.add_argument("--plot", metavar="PNG", help=plot_help)
     p.add_argument("--json", metavar="FILE", help="write the metrics and the curve as JSON")
+
+
+def result_files(args) -> tuple:
+    """(--plot path or None, --json path or None), checked before anything is simulated."""
+    return plot_file(args.plot), output_file(args.json, "--json")
+
+
+def frame_unit_geometry(args):
+    """The unit of the 3-D and 2-D commands (--L --h --t --w --b in mm, --E) in SI."""
+    from snapmorph.units.frame3d import UnitGeometry
+
+    mm = 1e-3
+    return UnitGeometry(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm,
+                        b=args.b * mm, E=args.E)
 
 
 def push_rows(r) -> list:

@@ -19,7 +19,8 @@ Lengths in units.csv are millimetres; units.csv has no b column (--b-over-L sets
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    from snapmorph.commands._common import add_snapped_option, integer, length_mm, number
+    from snapmorph.commands._common import (add_shape_options, add_snapped_option, integer,
+                                            length_mm, number)
 
     p = sub.add_parser("array", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -44,12 +45,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
                    help="resolution: base nodes per unit (default 161, as snapmorph unit)")
     p.add_argument("--E", type=number("Pa", 0.0, 1e13, what="Young's modulus"), default=2.2e9,
                    help="Young's modulus, Pa (default PETG)")
-    p.add_argument("--plot", default=None, help="single state: write a figure (PNG/PDF/SVG)")
-    p.add_argument("--csv", default=None, help="single state: write the base polyline (mm)")
-    p.add_argument("--overlay", default=None, metavar="TARGET_CSV",
-                   help="with --units: draw this target (x_mm, y_mm) over the shapes")
-    p.add_argument("--no-placement", action="store_true",
-                   help="ignore units.csv's placement line: clamp at (0, 0), heading +x")
+    add_shape_options(p, plot="single state: write a figure (PNG/PDF/SVG)",
+                      csv="single state: write the base polyline (mm)",
+                      overlay="with --units: draw this target (x_mm, y_mm) over the shapes",
+                      start="clamp at (0, 0), heading +x")
     p.add_argument("--no-fk", action="store_true",
                    help="skip the comparison with forward kinematics")
     p.add_argument("--out", default=None,

@@ -12,19 +12,17 @@ tangent_deg]) in the same frame and prints the largest distance from its points 
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    from snapmorph.commands._common import add_snapped_option
+    from snapmorph.commands._common import add_shape_options, add_snapped_option
 
     p = subparsers.add_parser("fk", help=HELP, description=HELP + ".", epilog=EPILOG)
     p.add_argument("--units", required=True, help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
     add_snapped_option(p, ", '0' for spacers, e.g. 101 (default: every arched unit snapped)")
     p.add_argument("--all", action="store_true",
                    help="every snap pattern (2^n), plotted in one figure")
-    p.add_argument("--plot", default=None, help="write a figure (PNG/PDF/SVG)")
-    p.add_argument("--csv", default=None, help="write the base polyline (mm) of --snapped")
-    p.add_argument("--overlay", default=None, metavar="TARGET_CSV",
-                   help="draw this target (x_mm, y_mm) over the shapes, same frame")
-    p.add_argument("--no-placement", action="store_true",
-                   help="ignore units.csv's placement line: start at (0, 0) heading +x")
+    add_shape_options(p, plot="write a figure (PNG/PDF/SVG)",
+                      csv="write the base polyline (mm) of --snapped",
+                      overlay="draw this target (x_mm, y_mm) over the shapes, same frame",
+                      start="start at (0, 0) heading +x")
     p.add_argument("--source", choices=("map", "simulate"), default="map",
                    help="unit shapes from the design map or a direct simulation "
                         "(default %(default)s)")

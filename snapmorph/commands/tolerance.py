@@ -21,18 +21,11 @@ def add_parser(sub):
     p = sub.add_parser("tolerance", help="fabrication tolerance of an array (Monte Carlo)",
                        description=HELP, epilog=EPILOG)
     p.add_argument("units", help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
-    p.add_argument("--sigma-h", type=number("mm", 0, 10, low_inclusive=True,
-                                            what="standard deviation of h"), default=0.5,
-                   help="standard deviation of the arch height h, mm (default 0.5)")
-    p.add_argument("--sigma-L", type=number("mm", 0, 10, low_inclusive=True,
-                                            what="standard deviation of L"), default=0.3,
-                   help="standard deviation of the base length L, mm (default 0.3)")
-    p.add_argument("--sigma-t", type=number("mm", 0, 10, low_inclusive=True,
-                                            what="standard deviation of t"), default=0.02,
-                   help="standard deviation of the thickness t, mm (default 0.02)")
-    p.add_argument("--sigma-w", type=number("mm", 0, 10, low_inclusive=True,
-                                            what="standard deviation of w"), default=0.0,
-                   help="standard deviation of the strip width w, mm (default 0)")
+    for name, what, default in (("h", "the arch height h", 0.5), ("L", "the base length L", 0.3),
+                                ("t", "the thickness t", 0.02), ("w", "the strip width w", 0.0)):
+        p.add_argument(f"--sigma-{name}", type=number("mm", 0, 10, low_inclusive=True,
+                                                      what=f"standard deviation of {name}"),
+                       default=default, help=f"standard deviation of {what}, mm (default {default:g})")
     p.add_argument("--n", type=integer(10, 1000000, what="samples"), default=1000,
                    help="number of Monte Carlo samples (default 1000)")
     p.add_argument("--seed", type=integer(0, None, what="random seed"), default=0,

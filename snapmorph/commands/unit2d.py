@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 
 from snapmorph.commands._common import (add_result_files, add_unit_dimensions, format_value,
-                                        integer, output_file, plot_file, print_why_not,
-                                        push_rows, write_result_json)
+                                        frame_unit_geometry, integer, print_why_not, push_rows,
+                                        result_files, write_result_json)
 
 HELP = """Simulate the paper's 2-D unit: a square frame base of side L made of strips of width w,
 with two arches joining opposite midpoints of its sides and crossing (bonded) at the apex,
@@ -20,6 +20,7 @@ units.unit2d, is SI)."""
 def add_parser(sub):
     p = sub.add_parser("unit2d", help="simulate the 2-D unit (square frame, crossing arches; mm)",
                        description=HELP)
+    p.set_defaults(run=run)
     add_unit_dimensions(p, L_what="side of the square", L_help="side of the square base, mm",
                         b_help="extra flat length of the arch ends beyond the frame strip, "
                         "mm (default 0)", nu=True)
@@ -27,20 +28,15 @@ def add_parser(sub):
                    help="resolution: nodes along one side of the square (default 41)")
     add_result_files(p, "write the two stable states in perspective and the force-displacement "
                         "curve")
-    p.set_defaults(run=run)
     return p
 
 
 def run(args: argparse.Namespace) -> int:
-    plot = plot_file(args.plot)
-    js = output_file(args.json, "--json")
-    from snapmorph.units.frame3d import UnitGeometry
+    plot, js = result_files(args)
     from snapmorph.units.status import exit_status
     from snapmorph.units.unit2d import SIDES, simulate_unit_2d
 
-    mm = 1e-3
-    g = UnitGeometry(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm, b=args.b * mm,
-                     E=args.E)
+    g = frame_unit_geometry(args)
     r = simulate_unit_2d(g, nodes=args.nodes, nu=args.nu)
     print(f"unit2d L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm")
     rows = push_rows(r) + [

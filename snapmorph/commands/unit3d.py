@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 
 from snapmorph.commands._common import (add_result_files, add_unit_dimensions, format_value,
-                                        integer, number, output_file, plot_file, print_why_not,
-                                        push_rows, write_result_json)
+                                        frame_unit_geometry, integer, number, print_why_not,
+                                        push_rows, result_files, write_result_json)
 
 HELP = """Simulate one bistable unit in 3-D: a rectangular frame base (two side rails of width w,
 solid end regions of width 4w), the arch through the frame's hole, rollers and actuator, on
@@ -41,9 +41,7 @@ def add_parser(sub):
 def run(args: argparse.Namespace) -> int:
     import math
 
-    plot = plot_file(args.plot)
-    js = output_file(args.json, "--json")
-    from snapmorph.units.frame3d import UnitGeometry
+    plot, js = result_files(args)
     from snapmorph.units.status import exit_status
     from snapmorph.units.unit3d import simulate_unit_3d
 
@@ -57,8 +55,7 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(f"--actuator-offset must be within [{-quarter:g}, {quarter:g}] mm (a "
                            f"quarter of the arch span L - 2(b + w)); got {args.actuator_offset:g}")
     mm = 1e-3
-    g = UnitGeometry(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm, b=args.b * mm,
-                     E=args.E)
+    g = frame_unit_geometry(args)
     r = simulate_unit_3d(g, nodes=args.nodes, tilt_deg=args.tilt,
                          apex_offset=args.apex_offset * mm,
                          actuator_offset=args.actuator_offset * mm, nu=args.nu)

@@ -94,7 +94,6 @@ def test_plot_and_cli(tmp_path, synthetic_map_path, capsys):
 
 
 # ------------------------------------------------------------------ against whole arrays
-@pytest.mark.slow
 def test_envelope_contains_perturbed_whole_array_simulations():
     """50 randomly perturbed three-unit arrays (independent of the Monte Carlo's samples),
     each simulated whole (design.arrays, released): at least 95 % inside the envelope."""

@@ -167,7 +167,6 @@ def test_maps_figure(tmp_path, inspected):
     assert not inspected["design_maps.png"], inspected["design_maps.png"]
 
 
-@pytest.mark.slow
 def test_specimens_figure(tmp_path, inspected):
     from snapmorph import figures_specimens
 
