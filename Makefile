@@ -7,7 +7,7 @@ JOBS   ?=
 MAPS_FLAGS ?=
 
 .DEFAULT_GOAL := help
-.PHONY: help venv test test-fast bench maps maps-ci maps-accuracy check-maps figures fuzz test-nojit clean
+.PHONY: help venv test test-fast test-durations bench maps maps-ci maps-accuracy check-maps figures fuzz test-nojit clean
 
 help:  ## list the targets
 	@echo "snapmorph make targets:"
@@ -24,8 +24,11 @@ venv: $(STAMP)  ## create .venv and install the project (done automatically by e
 test: $(STAMP)  ## run the whole test suite (slow tests included)
 	$(PY) -m pytest -q --durations=15
 
-test-fast: $(STAMP)  ## run the tests not marked slow
+test-fast: $(STAMP)  ## run the tests not marked slow (measured >= 2 s: tests/durations.json)
 	$(PY) -m pytest -q -m "not slow"
+
+test-durations: $(STAMP)  ## run the whole suite and write each test's time into tests/durations.json
+	$(PY) -m pytest -q --durations=15 --record-durations tests/durations.json
 
 bench: $(STAMP)  ## print speed figures (solver, unit, pipeline)
 	$(PY) bench/run.py

@@ -35,7 +35,7 @@ def meander(n_half: int = 5, R: float = 0.12):
 def main():
     warnings.simplefilter("ignore")
     from snapmorph.design import inverse_design
-    from snapmorph.design.inverse import verify_design
+    from snapmorph.design.verification import verify_design
     from snapmorph.design.lookup import load_map
     from snapmorph.design.targets import example_targets
 

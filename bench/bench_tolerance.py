@@ -20,7 +20,7 @@ def s_units():
 
 
 def main():
-    from snapmorph.design.tolerance import tolerance
+    from snapmorph.design.fabrication_tolerance import tolerance
     from snapmorph.maps import DesignMap
 
     with warnings.catch_warnings():

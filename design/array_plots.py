@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from snapmorph.design.plots import _plt, _save
+from snapmorph.design.plots import _plt, _save, label_grid
 
 # Okabe-Ito colours, safe for colour-vision deficiencies (as snapmorph.plotting.arrays).
 _BLUE, _ORANGE, _GREY = "#0072B2", "#E69F00", "#999999"
@@ -86,12 +86,7 @@ def plot_study(study, path, title: str | None = None, ncols: int = 4, placement=
             short = r.status.split(":")[0].split("(")[0].strip()[:28]
             ax.set_title(f"{key}: {short} (see table)", fontsize=8, color="#D55E00")
         ax.tick_params(labelsize=6)
-    for ax in axes[-1, :]:
-        ax.set_xlabel("x (mm)", fontsize=7)
-    for ax in axes[:, 0]:
-        ax.set_ylabel("y (mm)", fontsize=7)
-    for ax in list(axes.flat)[len(keys):]:
-        ax.axis("off")
+    label_grid(axes, len(keys), 7)
     h, lab = axes.flat[0].get_legend_handles_labels()
     fig.legend(h, lab, loc="lower center", ncol=min(len(h), 6), fontsize=8, frameon=False)
     note = ("state: one character per unit, 1 = snapped; dev: largest distance between the "

@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from snapmorph.design.kinematics import parse_state
+from snapmorph.design.kinematics import parse_snapped as parse_state
 from snapmorph.design.units import Unit
 
 __all__ = ["ArrayModel", "ArrayResult", "SnapRecord", "build_array", "simulate_array",

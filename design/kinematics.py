@@ -1,18 +1,19 @@
 """Forward kinematics of an array (paper, Section 3).
 
-The base of an array in any snapping state is the concatenation of its units' base shapes, each
-translated and rotated so that it starts where the previous one ends, along the previous end
-tangent. Neighbouring units are assumed not to interact (the paper's conjecture, validated on
-three units).
+The base of an array in any snap pattern (which units are snapped: ``snapped=``, e.g. "101")
+is the concatenation of its units' base shapes, each translated and rotated so that it starts
+where the previous one ends, along the previous end tangent. Neighbouring units are assumed not
+to interact (the paper's conjecture, validated on three units).
 
-Every function takes ``state=``: "released" (default, None: the units as used, actuators
-removed) or "actuated" (each snapped unit's state (iii) with its actuator still glued).
+Every function takes the units' state ``state=``: "released" (default, None: the units as used,
+actuators removed) or "actuated" (each snapped unit's state (iii) with its actuator still glued).
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -91,17 +92,18 @@ def forward_kinematics(units, snapped=None, source: str = "map", design_map=None
                  start_angle=start_angle, state=state, **kw).xy
 
 
-def parse_state(state, n: int) -> list[bool]:
-    """A state as n booleans, from a '0'/'1' string (char i: unit i + 1 snapped) or a sequence."""
-    if state is None:
+def parse_snapped(snapped, n: int) -> list[bool]:
+    """A snap pattern as n booleans, from a '0'/'1' string (char i: unit i + 1 snapped) or a
+    sequence; None: all snapped."""
+    if snapped is None:
         return [True] * n
-    if isinstance(state, str):
-        s = state.strip()
+    if isinstance(snapped, str):
+        s = snapped.strip()
         if len(s) != n or any(ch not in "01" for ch in s):
-            raise ValueError(f"state must be a string of {n} characters 0/1 (one per unit, "
-                             f"1 = snapped), got {state!r}")
+            raise ValueError(f"snapped must be a string of {n} characters 0/1 (one per unit, "
+                             f"1 = snapped), got {snapped!r}")
         return [ch == "1" for ch in s]
-    flags = list(state)
+    flags = list(snapped)
     if len(flags) != n:
         raise ValueError(f"snapped must have one entry per unit ({n}), got {len(flags)}")
     out = []
@@ -112,14 +114,15 @@ def parse_state(state, n: int) -> list[bool]:
     return out
 
 
-def all_states(units, source: str = "map", design_map=None, chains: bool = False,
-               state: str | None = None, **kw) -> dict:
-    """Every stable state of the array: {state string: (K, 2) base polyline in m} (or
-    {state string: Chain} with chains=True).
+def all_snap_patterns(units, source: str = "map", design_map=None, chains: bool = False,
+                      state: str | None = None, **kw) -> dict:
+    """Every stable state of the array: {snap pattern: (K, 2) base polyline in m} (or
+    {snap pattern: Chain} with chains=True).
 
-    Units that are spacers have one state only, so there are 2ⁿ states for n arched units;
-    their characters in the state string are always '0'. Ordered from all unsnapped upwards,
-    unit 1 being the most significant character. `state`: as in `forward_kinematics`.
+    Units that are spacers have one state only, so there are 2ⁿ snap patterns for n arched
+    units; their characters in the pattern are always '0'. Ordered from all unsnapped upwards,
+    unit 1 being the most significant character. `state` (the units' state, released or
+    actuated): as in `forward_kinematics`.
     """
     units, _ = _check(units, None)
     arched = [i for i, u in enumerate(units) if not u.is_spacer]
@@ -133,6 +136,23 @@ def all_states(units, source: str = "map", design_map=None, chains: bool = False
         ch = chain(units, snapped, source=source, lookup=lookup, state=state, **kw)
         out[key] = ch if chains else ch.xy
     return out
+
+
+def parse_state(state, n: int) -> list[bool]:
+    """Deprecated name (snapmorph 0.1) of `parse_snapped`."""
+    _renamed("parse_state", "parse_snapped")
+    return parse_snapped(state, n)
+
+
+def all_states(units, *args, **kw) -> dict:
+    """Deprecated name (snapmorph 0.1) of `all_snap_patterns`."""
+    _renamed("all_states", "all_snap_patterns")
+    return all_snap_patterns(units, *args, **kw)
+
+
+def _renamed(old: str, new: str) -> None:
+    warnings.warn(f"design.{old} is deprecated (a snap pattern is not a unit state); use "
+                  f"design.{new}", DeprecationWarning, stacklevel=3)
 
 
 def _check(units, snapped):
@@ -151,7 +171,7 @@ def _check(units, snapped):
     for i, u in enumerate(units):
         if not isinstance(u, Unit):
             raise ValueError(f"unit {i + 1} is not a design.Unit: {u!r}")
-    flags = parse_state(snapped, len(units))
+    flags = parse_snapped(snapped, len(units))
     if snapped is not None:  # None: every arched unit snapped (a spacer has one state only)
         for i, (u, f) in enumerate(zip(units, flags)):
             if f and u.is_spacer:

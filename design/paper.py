@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from snapmorph.design.inverse import inverse_design
-from snapmorph.design.kinematics import all_states
+from snapmorph.design.kinematics import all_snap_patterns
 from snapmorph.design.lookup import MapLookup, load_map
 from snapmorph.design.units import Unit
 
@@ -59,7 +59,7 @@ def three_units(design_map=None, source: str = "map") -> dict:
     else:
         dm, b = None, W
     unit = Unit(**FK_UNIT, side=1, b=b)
-    return all_states([unit] * 3, source=source, design_map=dm, chains=True, **kw)
+    return all_snap_patterns([unit] * 3, source=source, design_map=dm, chains=True, **kw)
 
 
 # --- the M ----------------------------------------------------------------------------------------
@@ -171,6 +171,26 @@ def write_figures(out, design_map=None) -> list[Path]:
     return paths
 
 
+# --- the scripts in examples/ -----------------------------------------------------------------------
+def example_parser(doc: str, out: str):
+    """The command line of an example script: --map and --out (default `out`); `doc`'s first
+    line is its description."""
+    import argparse
+
+    p = argparse.ArgumentParser(description=doc.splitlines()[0])
+    p.add_argument("--map", default=None, help="design map (default: the committed one)")
+    p.add_argument("--out", default=out)
+    return p
+
+
+def written(design, out=None):
+    """`design`, after writing units.csv, design.png and the drawings (a 600 mm laser bed)
+    into `out` when given."""
+    if out is not None:
+        design.write(out, bed_length_mm=600.0)
+    return design
+
+
 # --- the paper's angle convention (issue 11, item 4) ------------------------------------------
 def design_S_paper(design_map=None, **shape):
     """The S designed as the paper did: one unit per circular segment, entering the map with
@@ -189,7 +209,7 @@ def design_S_paper(design_map=None, **shape):
 def conventions(design_map=None, verify: bool = True) -> dict:
     """{"paper": design, "ours": design} of the paper's S, by the paper's convention (theta_end,
     Table 3) and by ours (θ, tolerance-driven), each simulated as a whole array when verify."""
-    from snapmorph.design.inverse import verify_design
+    from snapmorph.design.verification import verify_design
 
     dm = design_map if design_map is not None else load_map()
     pts, ang = s_control_points()

@@ -28,6 +28,17 @@ def _save(fig, path) -> Path:
     return path
 
 
+def label_grid(axes, used: int, fontsize) -> None:
+    """A grid of panels (axes: 2-D array) in mm: x labels on the bottom row, y labels on the
+    left column, and the panels after the first `used` switched off."""
+    for ax in axes[-1, :]:
+        ax.set_xlabel("x (mm)", fontsize=fontsize)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("y (mm)", fontsize=fontsize)
+    for ax in list(axes.flat)[used:]:
+        ax.axis("off")
+
+
 def draw_array(ax, units, xy=None, joints=None, color="C0", label=None):
     """Draw a base polyline (m) with its unit joints on ax, in mm."""
     if xy is not None:

@@ -45,15 +45,8 @@ def read_target_csv(path):
 
 def check_points(points, minimum: int, what: str = "target points") -> np.ndarray:
     """Points as a finite (N, 2) float array with at least `minimum` distinct rows."""
-    try:
-        p = np.asarray(points, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{what} must be an (N, 2) array of numbers (m)") from None
-    if p.ndim != 2 or p.shape[1] != 2:
-        raise ValueError(f"{what} must be an (N, 2) array (x, y in m), got shape {p.shape}")
-    if not np.all(np.isfinite(p)):
-        bad = int(np.flatnonzero(~np.all(np.isfinite(p), axis=1))[0])
-        raise ValueError(f"{what}: point {bad + 1} is not finite (NaN or inf): {p[bad].tolist()}")
+    p = _point_array(points, what)
+    _check_finite(p, what)
     if len(p) < minimum:
         raise ValueError(f"{what}: need at least {minimum} points, got {len(p)}")
     step = np.hypot(*np.diff(p, axis=0).T)
@@ -61,6 +54,23 @@ def check_points(points, minimum: int, what: str = "target points") -> np.ndarra
         i = int(np.flatnonzero(step <= 1e-9 * max(np.ptp(p[:, 0]), np.ptp(p[:, 1]), 1e-12))[0])
         raise ValueError(f"{what}: points {i + 1} and {i + 2} coincide")
     return p
+
+
+def _point_array(points, what) -> np.ndarray:
+    """Points as an (N, 2) float array, or a ValueError naming `what`."""
+    try:
+        p = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be an (N, 2) array of numbers (m)") from None
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"{what} must be an (N, 2) array (x, y in m), got shape {p.shape}")
+    return p
+
+
+def _check_finite(p: np.ndarray, what) -> None:
+    if not np.all(np.isfinite(p)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(p), axis=1))[0])
+        raise ValueError(f"{what}: point {bad + 1} is not finite (NaN or inf): {p[bad].tolist()}")
 
 
 def arc_length(xy: np.ndarray) -> float:
@@ -227,17 +237,10 @@ class Target:
 
 
 def _finite_points(points, what):
-    try:
-        p = np.asarray(points, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{what} must be an (N, 2) array of numbers (m)") from None
-    if p.ndim != 2 or p.shape[1] != 2:
-        raise ValueError(f"{what} must be an (N, 2) array (x, y in m), got shape {p.shape}")
+    p = _point_array(points, what)
     if len(p) < 2:
         raise ValueError(f"{what}: need at least 2 points, got {len(p)}")
-    if not np.all(np.isfinite(p)):
-        bad = int(np.flatnonzero(~np.all(np.isfinite(p), axis=1))[0])
-        raise ValueError(f"{what}: point {bad + 1} is not finite (NaN or inf): {p[bad].tolist()}")
+    _check_finite(p, what)
     if np.all(p == p[0]):
         raise ValueError(f"{what}: the target has zero length (all points coincide)")
     return p

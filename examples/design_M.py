@@ -12,25 +12,19 @@ of them until the deviation is below 1 % of the target length).
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 from snapmorph.design.lookup import load_map
-from snapmorph.design.paper import compare_M, design_M
+from snapmorph.design.paper import compare_M, design_M, example_parser, written
 
 
 def run(design_map=None, controls: str = "paper", refine: bool = False, out=None):
     """The M design; units.csv, design.png and the drawings into `out` when given."""
-    d = design_M(design_map, controls, refine)
-    if out is not None:
-        d.write(out, bed_length_mm=600.0)
-    return d
+    return written(design_M(design_map, controls, refine), out)
 
 
 def main(argv=None) -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--map", default=None, help="design map (default: the committed one)")
-    p.add_argument("--out", default="build/examples/M")
+    p = example_parser(__doc__, "build/examples/M")
     p.add_argument("--refine", action="store_true", help="least-squares refinement too")
     args = p.parse_args(argv)
     dm = load_map(args.map)

@@ -9,24 +9,17 @@ chord; Table 3: every unit (106.7, 25.8) mm.
 
 from __future__ import annotations
 
-import argparse
-
 from snapmorph.design.lookup import load_map
-from snapmorph.design.paper import compare_S, design_S
+from snapmorph.design.paper import compare_S, design_S, example_parser, written
 
 
 def run(design_map=None, out=None):
     """The S design; units.csv, design.png and the drawings into `out` when given."""
-    d = design_S(design_map)
-    if out is not None:
-        d.write(out, bed_length_mm=600.0)
-    return d
+    return written(design_S(design_map), out)
 
 
 def main(argv=None) -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--map", default=None, help="design map (default: the committed one)")
-    p.add_argument("--out", default="build/examples/S")
+    p = example_parser(__doc__, "build/examples/S")
     args = p.parse_args(argv)
     dm = load_map(args.map)
     d = run(dm, args.out)

@@ -9,12 +9,11 @@ with --simulate from the unit solver directly, with b = w as the paper's specime
 
 from __future__ import annotations
 
-import argparse
 import math
 from pathlib import Path
 
 from snapmorph.design.lookup import load_map
-from snapmorph.design.paper import three_units
+from snapmorph.design.paper import example_parser, three_units
 
 
 def run(design_map=None, source: str = "map", out=None) -> dict:
@@ -30,10 +29,8 @@ def run(design_map=None, source: str = "map", out=None) -> dict:
 
 
 def main(argv=None) -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--map", default=None, help="design map (default: the committed one)")
+    p = example_parser(__doc__, "build/examples/three_units")
     p.add_argument("--simulate", action="store_true", help="direct simulation, b = w")
-    p.add_argument("--out", default="build/examples/three_units")
     args = p.parse_args(argv)
     source = "simulate" if args.simulate else "map"
     states = run(load_map(args.map) if source == "map" else None, source, args.out)

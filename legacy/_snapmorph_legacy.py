@@ -22,7 +22,10 @@ import warnings
 OLD_PACKAGES = {name: f"snapmorph.{name}" for name in ("solver", "units", "pipeline", "maps", "design")}
 
 #: old modules that moved elsewhere than snapmorph.<old name>
-MOVED = {"solver.unit": "snapmorph.units.planar", "solver.unit_model": "snapmorph.units.geometry"}
+MOVED = {"solver.unit": "snapmorph.units.planar", "solver.unit_model": "snapmorph.units.geometry",
+         "design.tolerance": "snapmorph.design.fabrication_tolerance",
+         # research scripts, no longer installed: from a checkout only (studies/)
+         "units.studies3d": "studies.studies3d", "units.diagnostics3d": "studies.diagnostics3d"}
 
 
 def new_name(old: str) -> str | None:

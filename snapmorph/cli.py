@@ -57,24 +57,31 @@ def main(argv=None) -> int:
     if not getattr(args, "command", None):
         parser.print_help()
         return 0
+    # notes on old option names: after the output, or in the one line of an error
+    notes = getattr(args, "deprecation_notes", [])
     try:
-        return int(args.run(args) or 0)
-    except CommandError as exc:
-        print(f"snapmorph {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-    except ValueError as exc:
-        # Validation errors from the library name the parameter and its range.
-        print(f"snapmorph {args.command}: error: {exc}", file=sys.stderr)
+        status = int(args.run(args) or 0)
+    except (CommandError, ValueError) as exc:
+        # ValueError: validation errors from the library name the parameter and its range.
+        _error(args.command, str(exc), notes)
         return 2
     except OSError as exc:
         # Files the command could not read or write (the paths are checked up front by
         # `commands._common`; this catches what slips through, e.g. a disk that fills up).
         where = f": {exc.filename}" if getattr(exc, "filename", None) else ""
-        print(f"snapmorph {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        _error(args.command, f"{exc.strerror or exc}{where}", notes)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    for note in notes:
+        print(f"snapmorph {args.command}: {note}", file=sys.stderr)
+    return status
+
+
+def _error(command, message, notes) -> None:
+    print(f"snapmorph {command}: error: {message}" + "".join(f" ({n})" for n in notes),
+          file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -315,7 +315,6 @@ def test_corpus_size_and_coverage():
     assert not unknown, f"bad_inputs_open.md lists ids not in the corpus: {sorted(unknown)}"
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("cid", list(_params()))
 def test_bad_input(cid, corpus_results):
     ok, detail, seconds = corpus_results[cid]

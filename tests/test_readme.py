@@ -115,7 +115,6 @@ def test_readme_has_a_walk_through():
     assert sum(1 for s in steps if s[2]) >= 5, "commands should show their expected output"
 
 
-@pytest.mark.slow
 def test_readme_shell_blocks_run(workdir):
     for body, first in _sh_blocks():
         for lineno, command, expect in shell_steps(body, first):
@@ -133,7 +132,6 @@ def test_readme_shell_blocks_run(workdir):
                                          f"{frag!r} in the output:\n{out[-3000:]}")
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("index", range(len(_py_blocks())))
 def test_readme_python_blocks_run(index, workdir):
     body, first = _py_blocks()[index]

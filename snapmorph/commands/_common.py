@@ -133,6 +133,60 @@ def add_unit_dimensions(p, *, L_what: str = "base length", L_help: str = "base l
                        help="Poisson's ratio (default 0.38, PETG)")
 
 
+class _OldName(argparse.Action):
+    """An option's snapmorph 0.1 name: stores into the new option's dest, remembers that the old
+    name was typed (the messages then name it, as the user wrote it) and leaves a one-line
+    deprecation note in ``args.deprecation_notes`` (`cli.main` prints it)."""
+
+    def __init__(self, option_strings, dest, new_name="", **kw):
+        self.new_name = new_name
+        super().__init__(option_strings, dest, **kw)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        typed = dict(getattr(namespace, "typed_names", {}))
+        typed[self.dest] = option_string
+        namespace.typed_names = typed
+        note = f"note: {option_string} is deprecated; use {self.new_name}"
+        notes = list(getattr(namespace, "deprecation_notes", []))
+        namespace.deprecation_notes = notes + ([note] if note not in notes else [])
+
+
+def add_renamed_option(p, new: str, old: str, **kw) -> None:
+    """Option `new` (argparse keywords `kw`) and its old name `old`, hidden from --help, which
+    still works: `cli.main` prints one line on stderr saying the new name."""
+    action = p.add_argument(new, **kw)
+    p.add_argument(old, dest=action.dest, action=_OldName, new_name=new, help=argparse.SUPPRESS,
+                   default=argparse.SUPPRESS, type=kw.get("type"), choices=kw.get("choices"))
+
+
+def typed_name(args, dest: str, new: str) -> str:
+    """The name the user typed for option `dest`: its old name if that was used, else `new`."""
+    return getattr(args, "typed_names", {}).get(dest, new)
+
+
+def add_shape_options(p, *, plot: str, csv: str, overlay: str, start: str) -> None:
+    """--plot, --csv, --overlay TARGET_CSV and --no-placement of the array commands (fk, array):
+    help texts `plot`, `csv`, `overlay`, and where the array `start`s without its placement."""
+    p.add_argument("--plot", default=None, help=plot)
+    p.add_argument("--csv", default=None, help=csv)
+    p.add_argument("--overlay", default=None, metavar="TARGET_CSV", help=overlay)
+    p.add_argument("--no-placement", action="store_true",
+                   help=f"ignore units.csv's placement line: {start}")
+
+
+def add_snapped_option(p, what: str) -> None:
+    """--snapped PATTERN (snapmorph 0.1: --state), a snap pattern: one character per unit."""
+    add_renamed_option(p, "--snapped", "--state", default=None, metavar="PATTERN",
+                       help=f"snap pattern, one character per unit, '1' = snapped{what}")
+
+
+def add_unit_state_option(p, what: str) -> None:
+    """--unit-state released|actuated (snapmorph 0.1: --state), the units' state."""
+    add_renamed_option(p, "--unit-state", "--state", choices=("released", "actuated"),
+                       default="released", help=what)
+
+
 def _check_parent(path: Path, option: str) -> None:
     """Create the missing folders above `path`; refuse a parent that is a file."""
     parent = path.parent
@@ -239,3 +293,53 @@ def format_value(value, scale=1.0, digits=4) -> str:
     if value != value:  # NaN
         return "n/a"
     return f"{value * scale:.{digits}g}"
+
+
+# --- what the unit commands (unit, unit3d, unit2d) share
+def add_result_files(p, plot_help: str) -> None:
+    """--plot PNG and --json FILE of a unit command."""
+    p.add_argument("--plot", metavar="PNG", help=plot_help)
+    p.add_argument("--json", metavar="FILE", help="write the metrics and the curve as JSON")
+
+
+def result_files(args) -> tuple:
+    """(--plot path or None, --json path or None), checked before anything is simulated."""
+    return plot_file(args.plot), output_file(args.json, "--json")
+
+
+def frame_unit_geometry(args):
+    """The unit of the 3-D and 2-D commands (--L --h --t --w --b in mm, --E) in SI."""
+    from snapmorph.units.frame3d import UnitGeometry
+
+    mm = 1e-3
+    return UnitGeometry(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm,
+                        b=args.b * mm, E=args.E)
+
+
+def push_rows(r) -> list:
+    """The first rows a unit command prints, (name, value, unit): how the push went."""
+    return [("status", r.status, ""), ("bistable", format_value(r.bistable), ""),
+            ("F_cr", format_value(r.F_cr), "N"), ("d_cr", format_value(r.d_cr, 1e3), "mm"),
+            ("d_unstable (ii)", format_value(r.d_unstable, 1e3), "mm"),
+            ("d_second (iii)", format_value(r.d_second, 1e3), "mm")]
+
+
+def print_why_not(r, self_standing: bool = True) -> None:
+    """Why the unit is not bistable (or, with `self_standing`, not self-standing), if so."""
+    if r.reason and not r.bistable:
+        print(f"  not bistable: {r.reason}")
+    elif self_standing and r.self_standing is False:
+        print(f"  not self-standing: {r.stability.get('released_reason', '')}")
+
+
+def write_result_json(path, r, geometry, fields=("L", "h", "t", "w", "b", "E")) -> None:
+    """A unit result as JSON: its summary (NaN as null), the geometry's `fields` in m and the
+    force-displacement curve; says so on stdout."""
+    import json
+
+    payload = {k: (None if isinstance(v, float) and v != v else v) for k, v in r.summary().items()}
+    payload["geometry_m"] = {k: getattr(geometry, k) for k in fields}
+    payload["curve"] = {"d_m": r.curve[0].tolist(), "F_N": r.curve[1].tolist()}
+    with open(path, "w") as fh:
+        json.dump(payload, fh, indent=1)
+    print(f"wrote {path}")

@@ -10,7 +10,7 @@ snapped by its own self-equilibrated actuator (apex pushed towards its base, rea
 supports), which is then released. Compares the base with forward kinematics built from
 directly simulated single units (source "simulate").
 
-  snapmorph array --units units.csv --state 101 [--order 2,0] [--plot f.png] [--csv f.csv]
+  snapmorph array --units units.csv --snapped 101 [--order 2,0] [--plot f.png] [--csv f.csv]
   snapmorph array --units units.csv --all --out DIR      every state, overlay plots, tables
   snapmorph array --paper-three [--out DIR]              the paper's three units, 8 states
   snapmorph array --paper-M [--out DIR]                  the paper's Table 3 M array, 16 states
@@ -19,7 +19,8 @@ Lengths in units.csv are millimetres; units.csv has no b column (--b-over-L sets
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    from snapmorph.commands._common import integer, length_mm, number
+    from snapmorph.commands._common import (add_shape_options, add_snapped_option, integer,
+                                            length_mm, number)
 
     p = sub.add_parser("array", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -29,12 +30,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
                       help="every state of the paper's three units (t 0.5, h 20, w 5, L 100 mm)")
     what.add_argument("--paper-M", action="store_true",
                       help="every state of the paper's inverse-designed M (Table 3 units)")
-    p.add_argument("--state", default=None,
-                   help="one character per unit, '1' = snapped, e.g. 101 (default: every arched "
-                        "unit snapped)")
+    add_snapped_option(p, ", e.g. 101 (default: every arched unit snapped)")
     p.add_argument("--order", default=None,
                    help="snapping order, 0-based unit indices, e.g. 2,0 (default ascending; "
-                        "units listed but not snapped in --state are skipped)")
+                        "units listed but not snapped in --snapped are skipped)")
     p.add_argument("--all", action="store_true", help="with --units: every state (a study)")
     p.add_argument("--b-over-L", type=number("", 0.0, 0.5, low_inclusive=True,
                                              high_inclusive=False, what="b / L"), default=0.0,
@@ -46,12 +45,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
                    help="resolution: base nodes per unit (default 161, as snapmorph unit)")
     p.add_argument("--E", type=number("Pa", 0.0, 1e13, what="Young's modulus"), default=2.2e9,
                    help="Young's modulus, Pa (default PETG)")
-    p.add_argument("--plot", default=None, help="single state: write a figure (PNG/PDF/SVG)")
-    p.add_argument("--csv", default=None, help="single state: write the base polyline (mm)")
-    p.add_argument("--overlay", default=None, metavar="TARGET_CSV",
-                   help="with --units: draw this target (x_mm, y_mm) over the shapes")
-    p.add_argument("--no-placement", action="store_true",
-                   help="ignore units.csv's placement line: clamp at (0, 0), heading +x")
+    add_shape_options(p, plot="single state: write a figure (PNG/PDF/SVG)",
+                      csv="single state: write the base polyline (mm)",
+                      overlay="with --units: draw this target (x_mm, y_mm) over the shapes",
+                      start="clamp at (0, 0), heading +x")
     p.add_argument("--no-fk", action="store_true",
                    help="skip the comparison with forward kinematics")
     p.add_argument("--out", default=None,
@@ -63,11 +60,13 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 def _check(args):
     from snapmorph.cli import CommandError
+    from snapmorph.commands._common import typed_name
 
     study = args.paper_three or args.paper_M or args.all
-    if study and (args.state or args.order or args.plot or args.csv):
-        raise CommandError("--state, --order, --plot and --csv apply to one state "
-                           "(not with --all, --paper-three, --paper-M)")
+    if study and (args.snapped or args.order or args.plot or args.csv):
+        raise CommandError(f"{typed_name(args, 'snapped', '--snapped')}, --order, --plot and "
+                           "--csv apply to one snap pattern (not with --all, --paper-three, "
+                           "--paper-M)")
     if args.all and not args.units:
         raise CommandError("--all needs --units")
     if args.b is not None and not args.paper_three:
@@ -120,9 +119,9 @@ def run(args) -> int:
         from snapmorph.commands._common import output_dir
 
         out = output_dir(Path(args.out) if args.out else Path("build/array") / folder, "--out")
-        from snapmorph.commands.fk import _check_all
+        from snapmorph.commands.fk import check_all
 
-        _check_all(units, 8, "--all")
+        check_all(units, 8, "--all")
         n_arched = sum(not u.is_spacer for u in units)
         print(f"simulating {2 ** n_arched} states of {len(units)} units (a few seconds each) ...",
               flush=True)
@@ -156,11 +155,12 @@ def _one_state(args) -> int:
     from snapmorph.design.arrays import simulate_array
     from snapmorph.design.kinematics import chain
     from snapmorph.design.targets import distances_to_polyline
-    from snapmorph.commands.fk import check_state
+    from snapmorph.commands._common import typed_name
+    from snapmorph.commands.fk import check_snapped
     from snapmorph.plotting.arrays import transform
 
     units, placement, target = _read_units(args)
-    snapped = check_state(args.state, units)
+    snapped = check_snapped(args.snapped, units, typed_name(args, "snapped", "--snapped"))
     if args.order is not None:
         from snapmorph.design.arrays import _order
         from snapmorph.commands._common import CommandError

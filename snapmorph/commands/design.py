@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import integer, number
+from snapmorph.commands._common import add_unit_state_option, integer, number
 
 HELP = "design an array of units that snaps into a target shape; write units.csv, drawings, plots"
 
@@ -40,9 +40,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--min-barrier", type=float, default=0.5,
                    help="smallest energy barrier of a unit, E I_arch / L (default %(default)s)")
     p.add_argument("--max-units", type=int, default=40, help="at most this many arched units")
-    p.add_argument("--state", choices=("released", "actuated"), default="released",
-                   help="unit state the map is entered with (default %(default)s: actuator "
-                        "removed, as used)")
+    add_unit_state_option(p, "unit state the map is entered with (default %(default)s: "
+                             "actuator removed, as used)")
     p.add_argument("--theta-convention", choices=("ours", "paper"), default="ours",
                    help="'paper': the paper's procedure entering the map with theta_end "
                         "(reproduces its Table 3; such designs over-curve about twice)")
@@ -148,7 +147,7 @@ def run(args) -> int:
                            design_map=dm, tol=args.tol, max_controls=args.max_controls,
                            min_turn_deg=args.min_turn, refine=args.refine or None,
                            placement=args.placement, L_range=L_range, hL_range=hL_range,
-                           min_barrier=args.min_barrier, state=args.state,
+                           min_barrier=args.min_barrier, state=args.unit_state,
                            max_units=args.max_units, theta_convention=args.theta_convention,
                            verify=not args.no_verify, progress=progress)
     try:

@@ -1,10 +1,10 @@
-"""`snapmorph fk`: forward kinematics of an array in one or every snapping state (Section 3)."""
+"""`snapmorph fk`: forward kinematics of an array in one or every snap pattern (Section 3)."""
 
 from __future__ import annotations
 
 import argparse
 
-HELP = "shape of an array of units in a snapping state (forward kinematics)"
+HELP = "shape of an array of units in a snap pattern (forward kinematics)"
 EPILOG = """Frame: when units.csv starts with a '# placement' line (written by `snapmorph
 design`), shapes, printed joints and --csv are in the target's frame (where the design put unit
 1); otherwise unit 1 starts at (0, 0) heading +x. --overlay draws a target CSV (x_mm, y_mm[,
@@ -12,18 +12,17 @@ tangent_deg]) in the same frame and prints the largest distance from its points 
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
+    from snapmorph.commands._common import add_shape_options, add_snapped_option
+
     p = subparsers.add_parser("fk", help=HELP, description=HELP + ".", epilog=EPILOG)
     p.add_argument("--units", required=True, help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
-    p.add_argument("--state", default=None,
-                   help="one character per unit, '1' = snapped, '0' for spacers, e.g. 101 "
-                        "(default: every arched unit snapped)")
-    p.add_argument("--all", action="store_true", help="every state (2^n), plotted in one figure")
-    p.add_argument("--plot", default=None, help="write a figure (PNG/PDF/SVG)")
-    p.add_argument("--csv", default=None, help="write the base polyline (mm) of --state")
-    p.add_argument("--overlay", default=None, metavar="TARGET_CSV",
-                   help="draw this target (x_mm, y_mm) over the shapes, same frame")
-    p.add_argument("--no-placement", action="store_true",
-                   help="ignore units.csv's placement line: start at (0, 0) heading +x")
+    add_snapped_option(p, ", '0' for spacers, e.g. 101 (default: every arched unit snapped)")
+    p.add_argument("--all", action="store_true",
+                   help="every snap pattern (2^n), plotted in one figure")
+    add_shape_options(p, plot="write a figure (PNG/PDF/SVG)",
+                      csv="write the base polyline (mm) of --snapped",
+                      overlay="draw this target (x_mm, y_mm) over the shapes, same frame",
+                      start="start at (0, 0) heading +x")
     p.add_argument("--source", choices=("map", "simulate"), default="map",
                    help="unit shapes from the design map or a direct simulation "
                         "(default %(default)s)")
@@ -32,20 +31,21 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-MAX_ALL = 10  # --all: at most 2^10 states
+MAX_ALL = 10  # --all: at most 2^10 snap patterns
 
 
-def _check_all(units, most, option):
+def check_all(units, most, option):
+    """Refuse `option` (every snap pattern) for more than `most` arched units."""
     from snapmorph.commands._common import CommandError
 
     n = sum(not u.is_spacer for u in units)
     if n > most:
         raise CommandError(f"{option} would draw 2^{n} states ({2 ** n}); it takes at most "
-                           f"{most} arched units (give one --state instead)")
+                           f"{most} arched units (give one --snapped instead)")
 
 
-def check_state(text, units, option="--state"):
-    """Booleans for a '0'/'1' state string of `units`; None gives every arched unit snapped.
+def check_snapped(text, units, option="--snapped"):
+    """Booleans for a '0'/'1' snap pattern of `units`; None gives every arched unit snapped.
     A '1' on a spacer (h = 0) is refused: a spacer has one state only."""
     from snapmorph.commands._common import CommandError
 
@@ -82,7 +82,7 @@ def load_units(args):
 def run(args) -> int:
     import math
 
-    from snapmorph.commands._common import input_file, output_file, plot_file
+    from snapmorph.commands._common import input_file, output_file, plot_file, typed_name
 
     # Paths first: nothing long runs before a bad path is refused.
     input_file(args.units, "--units")
@@ -92,24 +92,26 @@ def run(args) -> int:
         input_file(args.overlay, "--overlay")
     plot_file(args.plot, "--plot")
     output_file(args.csv, "--csv")
-    if args.all and (args.state or args.csv):
+    snapped_option = typed_name(args, "snapped", "--snapped")
+    if args.all and (args.snapped or args.csv):
         from snapmorph.commands._common import CommandError
 
-        raise CommandError("--state and --csv apply to one state, not with --all")
+        raise CommandError(f"{snapped_option} and --csv apply to one snap pattern, not with "
+                           "--all")
 
     import numpy as np
 
-    from snapmorph.design import all_states, chain
+    from snapmorph.design import all_snap_patterns, chain
     from snapmorph.design.lookup import MapLookup, load_map
     from snapmorph.design.targets import distances_to_polyline
     from snapmorph.plotting.arrays import plot_fk_state, plot_fk_states
 
-    # Read and check the files and the state before loading the map (the slow part).
+    # Read and check the files and the snap pattern before loading the map (the slow part).
     units, placement, target = load_units(args)
     if not args.all:
-        check_state(args.state, units)
+        check_snapped(args.snapped, units, snapped_option)
     else:
-        _check_all(units, MAX_ALL, "--all")
+        check_all(units, MAX_ALL, "--all")
     lookup = MapLookup(load_map(args.map)) if args.source == "map" else None
     if lookup is not None and lookup.b_over_L:
         args._b_over_L = lookup.b_over_L
@@ -121,9 +123,9 @@ def run(args) -> int:
              f"{math.degrees(start_angle):.2f} deg)") if placement else \
         "array frame (unit 1 starts at (0, 0) heading +x)"
     if args.all:
-        states = all_states(units, source=args.source,
-                            design_map=lookup.dm if lookup else None, chains=True,
-                            start=start, start_angle=start_angle)
+        states = all_snap_patterns(units, source=args.source,
+                                   design_map=lookup.dm if lookup else None, chains=True,
+                                   start=start, start_angle=start_angle)
         print(f"{len(units)} units, {len(states)} states, {frame}; end point and end direction:")
         for key, c in states.items():
             print(f"  {key}: ({c.xy[-1, 0] * 1e3:8.1f}, {c.xy[-1, 1] * 1e3:8.1f}) mm, "
@@ -133,7 +135,7 @@ def run(args) -> int:
                                     title=str(args.units), target=target, placement=placement)
             print(f"wrote {figure}")
         return 0
-    snapped = check_state(args.state, units)
+    snapped = check_snapped(args.snapped, units, snapped_option)
     key = "".join("1" if s else "0" for s in snapped)
     ch = chain(units, snapped, source=args.source, lookup=lookup, start=start,
                start_angle=start_angle)

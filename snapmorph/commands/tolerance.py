@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import integer, number
+from snapmorph.commands._common import add_unit_state_option, integer, number
 
 HELP = """Propagate fabrication errors of hand-made units (normal errors in L, h, t and w,
 standard deviations in millimetres) through the design map: the envelope of the all-snapped
@@ -21,24 +21,16 @@ def add_parser(sub):
     p = sub.add_parser("tolerance", help="fabrication tolerance of an array (Monte Carlo)",
                        description=HELP, epilog=EPILOG)
     p.add_argument("units", help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
-    p.add_argument("--sigma-h", type=number("mm", 0, 10, low_inclusive=True,
-                                            what="standard deviation of h"), default=0.5,
-                   help="standard deviation of the arch height h, mm (default 0.5)")
-    p.add_argument("--sigma-L", type=number("mm", 0, 10, low_inclusive=True,
-                                            what="standard deviation of L"), default=0.3,
-                   help="standard deviation of the base length L, mm (default 0.3)")
-    p.add_argument("--sigma-t", type=number("mm", 0, 10, low_inclusive=True,
-                                            what="standard deviation of t"), default=0.02,
-                   help="standard deviation of the thickness t, mm (default 0.02)")
-    p.add_argument("--sigma-w", type=number("mm", 0, 10, low_inclusive=True,
-                                            what="standard deviation of w"), default=0.0,
-                   help="standard deviation of the strip width w, mm (default 0)")
+    for name, what, default in (("h", "the arch height h", 0.5), ("L", "the base length L", 0.3),
+                                ("t", "the thickness t", 0.02), ("w", "the strip width w", 0.0)):
+        p.add_argument(f"--sigma-{name}", type=number("mm", 0, 10, low_inclusive=True,
+                                                      what=f"standard deviation of {name}"),
+                       default=default, help=f"standard deviation of {what}, mm (default {default:g})")
     p.add_argument("--n", type=integer(10, 1000000, what="samples"), default=1000,
                    help="number of Monte Carlo samples (default 1000)")
     p.add_argument("--seed", type=integer(0, None, what="random seed"), default=0,
                    help="random seed (default 0; the same seed gives the same result)")
-    p.add_argument("--state", choices=("released", "actuated"), default="released",
-                   help="units released from their actuators (default) or still actuated")
+    add_unit_state_option(p, "units released from their actuators (default) or still actuated")
     p.add_argument("--map", metavar="FILE", help="design map (default maps/data/default.nc)")
     p.add_argument("--target", metavar="CSV", help="target curve (x_mm, y_mm) to draw under the envelope")
     p.add_argument("--simulate", type=integer(0, 1000, what="whole-array simulations"), default=0,
@@ -68,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     json_path = output_file(args.json, "--json") if args.json else None
 
     from snapmorph.design.lookup import load_map
-    from snapmorph.design.tolerance import plot_tolerance, tolerance
+    from snapmorph.design.fabrication_tolerance import plot_tolerance, tolerance
     from snapmorph.design.units import read_placement, read_units_csv
 
     dm = load_map(args.map)
@@ -78,7 +70,8 @@ def run(args: argparse.Namespace) -> int:
     if args.sigma_w:
         sigma["w"] = args.sigma_w * 1e-3
     try:
-        r = tolerance(units, sigma=sigma, n=args.n, seed=args.seed, design_map=dm, state=args.state)
+        r = tolerance(units, sigma=sigma, n=args.n, seed=args.seed, design_map=dm,
+                      state=args.unit_state)
     except ValueError as exc:
         raise CommandError(str(exc)) from None
     print(f"{units_path}: {len(units)} units")
@@ -117,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
 def simulate_perturbed(units, sigma, k, seed, result):
     """Simulate ``k`` whole arrays (all snapped) with independently perturbed units: (list of
     (K, 2) bases, list of bool inside the envelope). Arrays that fail are skipped."""
-    from snapmorph.design.tolerance import perturbed_units
+    from snapmorph.design.fabrication_tolerance import perturbed_units
     from snapmorph.design.arrays import simulate_array
 
     curves, inside = [], []

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import (add_unit_dimensions, format_value, integer, length_mm,
-                                        number)
+from snapmorph.commands._common import (add_result_files, add_unit_dimensions, format_value,
+                                        integer, length_mm, number, print_why_not, push_rows,
+                                        write_result_json)
 
 HELP = """Simulate one bistable unit: push its apex down until it snaps, and report F_cr,
 the equilibrium displacements, S, theta (actuated and released) and the energies. Lengths on
@@ -28,8 +29,7 @@ def add_parser(sub):
                    help="path follower (default mgdc)")
     p.add_argument("--time-limit", type=number("s", 0, what="wall-time limit"), default=None,
                    help="stop after this many seconds with status timeout (default: no limit)")
-    p.add_argument("--plot", metavar="PNG", help="write the force-displacement curve and the shapes (i)-(iii)")
-    p.add_argument("--json", metavar="FILE", help="write the metrics and the curve as JSON")
+    add_result_files(p, "write the force-displacement curve and the shapes (i)-(iii)")
     p.set_defaults(run=run)
     return p
 
@@ -52,7 +52,6 @@ def _domain_message(problem: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
     import math
 
     from snapmorph.cli import CommandError
@@ -72,17 +71,12 @@ def run(args: argparse.Namespace) -> int:
 
     from snapmorph.units.geometry import UnitGeometry
     from snapmorph.units.planar import simulate_unit
+    from snapmorph.units.status import exit_status
 
     g = UnitGeometry(**dims)
     r = simulate_unit(g, nodes=args.nodes, method=args.method, time_limit=args.time_limit)
     rel = r.released or {}
-    rows = [
-        ("status", r.status, ""),
-        ("bistable", format_value(r.bistable), ""),
-        ("F_cr", format_value(r.F_cr), "N"),
-        ("d_cr", format_value(r.d_cr, 1e3), "mm"),
-        ("d_unstable (ii)", format_value(r.d_unstable, 1e3), "mm"),
-        ("d_second (iii)", format_value(r.d_second, 1e3), "mm"),
+    rows = push_rows(r) + [
         ("S", format_value(r.S, 1e3), "mm"),
         ("S/L", format_value(r.S / g.L if r.S == r.S else math.nan), ""),
         ("theta", format_value(r.theta_deg), "deg"),
@@ -100,16 +94,10 @@ def run(args: argparse.Namespace) -> int:
           + ("b + w" if args.bond_length is None else f"{args.bond_length:g} mm"))
     for name, value, unit in rows:
         print(f"  {name:<20} {value:>12} {unit}")
-    if r.reason and not r.bistable:
-        print(f"  not bistable: {r.reason}")
+    print_why_not(r, self_standing=False)
     if json_path:
-        payload = {k: (None if isinstance(v, float) and v != v else v) for k, v in r.summary().items()}
-        payload["geometry_m"] = {k: getattr(g, k) for k in ("L", "h", "t", "w", "b", "E",
-                                                             "joint_length", "bond_length")}
-        payload["curve"] = {"d_m": r.curve[0].tolist(), "F_N": r.curve[1].tolist()}
-        with open(json_path, "w") as fh:
-            json.dump(payload, fh, indent=1)
-        print(f"wrote {json_path}")
+        write_result_json(json_path, r, g, ("L", "h", "t", "w", "b", "E", "joint_length",
+                                             "bond_length"))
     if plot_path:
         from snapmorph.plotting.unit import plot_unit
 
@@ -117,4 +105,4 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {plot_path}")
     if r.status.startswith("timeout"):
         raise CommandError(f"{r.status} (--time-limit {args.time_limit:g} s)")
-    return 0 if r.status_code in (0, 1, 5) else 1
+    return exit_status(r.status)

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import (add_unit_dimensions, format_value, integer, output_file,
-                                        plot_file)
+from snapmorph.commands._common import (add_result_files, add_unit_dimensions, format_value,
+                                        frame_unit_geometry, integer, print_why_not, push_rows,
+                                        result_files, write_result_json)
 
 HELP = """Simulate the paper's 2-D unit: a square frame base of side L made of strips of width w,
 with two arches joining opposite midpoints of its sides and crossing (bonded) at the apex,
@@ -19,47 +20,35 @@ units.unit2d, is SI)."""
 def add_parser(sub):
     p = sub.add_parser("unit2d", help="simulate the 2-D unit (square frame, crossing arches; mm)",
                        description=HELP)
+    p.set_defaults(run=run)
     add_unit_dimensions(p, L_what="side of the square", L_help="side of the square base, mm",
                         b_help="extra flat length of the arch ends beyond the frame strip, "
                         "mm (default 0)", nu=True)
     p.add_argument("--nodes", type=integer(11, 1001, what="nodes along a side"), default=None,
                    help="resolution: nodes along one side of the square (default 41)")
-    p.add_argument("--plot", metavar="PNG", help="write the two stable states in perspective "
-                   "and the force-displacement curve")
-    p.add_argument("--json", metavar="FILE", help="write the metrics and the curve as JSON")
-    p.set_defaults(run=run)
+    add_result_files(p, "write the two stable states in perspective and the force-displacement "
+                        "curve")
     return p
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
-
-    plot = plot_file(args.plot)
-    js = output_file(args.json, "--json")
-    from snapmorph.units.frame3d import UnitGeometry
+    plot, js = result_files(args)
+    from snapmorph.units.status import exit_status
     from snapmorph.units.unit2d import SIDES, simulate_unit_2d
 
-    mm = 1e-3
-    g = UnitGeometry(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm, b=args.b * mm,
-                     E=args.E)
+    g = frame_unit_geometry(args)
     r = simulate_unit_2d(g, nodes=args.nodes, nu=args.nu)
     print(f"unit2d L={args.L:g} h={args.h:g} t={args.t:g} w={args.w:g} b={args.b:g} mm")
-    rows = [("status", r.status, ""), ("bistable", format_value(r.bistable), ""),
-            ("F_cr", format_value(r.F_cr), "N"), ("d_cr", format_value(r.d_cr, 1e3), "mm"),
-            ("d_unstable (ii)", format_value(r.d_unstable, 1e3), "mm"),
-            ("d_second (iii)", format_value(r.d_second, 1e3), "mm"),
-            ("S (mean)", format_value(r.S, 1e3), "mm"),
-            ("theta (mean)", format_value(r.theta_deg), "deg"),
-            ("self-standing", format_value(r.self_standing), ""),
-            ("S released (mean)", format_value(r.S_released, 1e3), "mm"),
-            ("theta released (mean)", format_value(r.theta_released_deg), "deg"),
-            ("nodes", str(r.n_nodes), ""), ("solve time", format_value(r.solve_time, 1.0, 3), "s")]
+    rows = push_rows(r) + [
+        ("S (mean)", format_value(r.S, 1e3), "mm"),
+        ("theta (mean)", format_value(r.theta_deg), "deg"),
+        ("self-standing", format_value(r.self_standing), ""),
+        ("S released (mean)", format_value(r.S_released, 1e3), "mm"),
+        ("theta released (mean)", format_value(r.theta_released_deg), "deg"),
+        ("nodes", str(r.n_nodes), ""), ("solve time", format_value(r.solve_time, 1.0, 3), "s")]
     for name, value, unit in rows:
         print(f"  {name:<22} {value:>12} {unit}")
-    if r.reason and not r.bistable:
-        print(f"  not bistable: {r.reason}")
-    elif r.self_standing is False:
-        print(f"  not self-standing: {r.stability.get('released_reason', '')}")
+    print_why_not(r)
     for title, edges in (("state (iii)", r.edges.get("iii")),
                          ("the released state (iii)", r.released.get("edges"))):
         if not edges:
@@ -71,17 +60,10 @@ def run(args: argparse.Namespace) -> int:
             print(f"    {side:<8} {format_value(m['S'], 1e3):>14} {format_value(m['theta_deg']):>13} "
                   f"{format_value(m['curvature']):>17} {format_value(m['sag'], 1e3):>10}")
     if js:
-        payload = {k: (None if isinstance(v, float) and v != v else v)
-                   for k, v in r.summary().items()}
-        payload["geometry_m"] = {k: getattr(g, k) for k in ("L", "h", "t", "w", "b", "E")}
-        payload["curve"] = {"d_m": r.curve[0].tolist(), "F_N": r.curve[1].tolist()}
-        with open(js, "w") as fh:
-            json.dump(payload, fh, indent=1)
-        print(f"wrote {js}")
+        write_result_json(js, r, g)
     if plot:
         from snapmorph.figures_unit3d import plot_unit2d_states
 
         plot_unit2d_states(r, plot)
         print(f"wrote {plot}")
-    return 0 if (r.status in ("ok", "monostable")
-                 or r.status.startswith("second state unstable")) else 1
+    return exit_status(r.status)

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import (add_unit_dimensions, format_value, integer, number,
-                                        output_file, plot_file)
+from snapmorph.commands._common import (add_result_files, add_unit_dimensions, format_value,
+                                        frame_unit_geometry, integer, number, print_why_not,
+                                        push_rows, result_files, write_result_json)
 
 HELP = """Simulate one bistable unit in 3-D: a rectangular frame base (two side rails of width w,
 solid end regions of width 4w), the arch through the frame's hole, rollers and actuator, on
@@ -31,20 +32,17 @@ def add_parser(sub):
                    help="resolution: nodes along a rail (default 41)")
     p.add_argument("--planar", action="store_true",
                    help="also run the planar model and print both side by side")
-    p.add_argument("--plot", metavar="PNG", help="write the states (i)-(iii) in perspective "
-                   "and the force-displacement curve")
-    p.add_argument("--json", metavar="FILE", help="write the metrics and the curve as JSON")
+    add_result_files(p, "write the states (i)-(iii) in perspective and the force-displacement "
+                        "curve")
     p.set_defaults(run=run)
     return p
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
     import math
 
-    plot = plot_file(args.plot)
-    js = output_file(args.json, "--json")
-    from snapmorph.units.frame3d import UnitGeometry
+    plot, js = result_files(args)
+    from snapmorph.units.status import exit_status
     from snapmorph.units.unit3d import simulate_unit_3d
 
     from snapmorph.cli import CommandError
@@ -57,8 +55,7 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(f"--actuator-offset must be within [{-quarter:g}, {quarter:g}] mm (a "
                            f"quarter of the arch span L - 2(b + w)); got {args.actuator_offset:g}")
     mm = 1e-3
-    g = UnitGeometry(L=args.L * mm, h=args.h * mm, t=args.t * mm, w=args.w * mm, b=args.b * mm,
-                     E=args.E)
+    g = frame_unit_geometry(args)
     r = simulate_unit_3d(g, nodes=args.nodes, tilt_deg=args.tilt,
                          apex_offset=args.apex_offset * mm,
                          actuator_offset=args.actuator_offset * mm, nu=args.nu)
@@ -67,11 +64,8 @@ def run(args: argparse.Namespace) -> int:
         from snapmorph.units import simulate_unit
 
         planar = simulate_unit(g)
-    rows = [("status", r.status, ""), ("bistable", format_value(r.bistable), ""),
-            ("F_cr", format_value(r.F_cr), "N"), ("d_cr", format_value(r.d_cr, 1e3), "mm"),
-            ("d_unstable (ii)", format_value(r.d_unstable, 1e3), "mm"),
-            ("d_second (iii)", format_value(r.d_second, 1e3), "mm"),
-            ("S", format_value(r.S, 1e3), "mm"), ("theta", format_value(r.theta_deg), "deg")]
+    rows = push_rows(r) + [("S", format_value(r.S, 1e3), "mm"),
+                           ("theta", format_value(r.theta_deg), "deg")]
     rel = r.released or {}
     rows += [("self-standing", format_value(r.self_standing), ""),
              ("S released", format_value(rel.get("S", math.nan), 1e3), "mm"),
@@ -101,22 +95,12 @@ def run(args: argparse.Namespace) -> int:
             shown = format_value(v) if scale is None else format_value(v, scale)
             extra = f"   planar {shown:>10}"
         print(f"  {name:<22} {value:>12} {unit:<4}{extra}")
-    if r.reason and not r.bistable:
-        print(f"  not bistable: {r.reason}")
-    elif r.self_standing is False:
-        print(f"  not self-standing: {r.stability.get('released_reason', '')}")
+    print_why_not(r)
     if js:
-        payload = {k: (None if isinstance(v, float) and v != v else v)
-                   for k, v in r.summary().items()}
-        payload["geometry_m"] = {k: getattr(g, k) for k in ("L", "h", "t", "w", "b", "E")}
-        payload["curve"] = {"d_m": r.curve[0].tolist(), "F_N": r.curve[1].tolist()}
-        with open(js, "w") as fh:
-            json.dump(payload, fh, indent=1)
-        print(f"wrote {js}")
+        write_result_json(js, r, g)
     if plot:
         from snapmorph.figures_unit3d import plot_unit3d_states
 
         plot_unit3d_states(r, plot, planar=planar)
         print(f"wrote {plot}")
-    return 0 if (r.status in ("ok", "monostable")
-                 or r.status.startswith("second state unstable")) else 1
+    return exit_status(r.status)

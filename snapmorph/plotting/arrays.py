@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 # one Agg set-up and one way of saving for every figure of the project
-from snapmorph.design.plots import _plt, _save
+from snapmorph.design.plots import _plt, _save, label_grid
 
 #: Okabe-Ito colours (safe for the common colour-vision deficiencies).
 OKABE_ITO = {"blue": "#0072B2", "orange": "#E69F00", "green": "#009E73", "vermillion": "#D55E00",
@@ -95,12 +95,7 @@ def plot_fk_states(states: dict, path, *, title=None, target=None, placement=Non
         ax.set_title(f"state {key}", fontsize=9)
         ax.tick_params(labelsize=7)
         ax.grid(True, color="0.9", lw=0.5)
-    for ax in axes[-1, :]:
-        ax.set_xlabel("x (mm)", fontsize=8)
-    for ax in axes[:, 0]:
-        ax.set_ylabel("y (mm)", fontsize=8)
-    for ax in list(axes.flat)[len(keys):]:
-        ax.axis("off")
+    label_grid(axes, len(keys), 8)
     h, lab = axes.flat[0].get_legend_handles_labels()
     fig.legend(h, lab, loc="lower center", ncol=len(h), fontsize=8, frameon=False,
                bbox_to_anchor=(0.5, 0.0))

@@ -60,7 +60,6 @@ def _committed_map():
     return DesignMap.load(DEFAULT_MAP)
 
 
-@pytest.mark.slow
 def test_examples_on_the_committed_map():
     """On the real map: the S of circular segments is matched within 1 %; the M within 5 % by
     the biarc design, and better after the least-squares refinement."""

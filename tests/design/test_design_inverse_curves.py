@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from snapmorph.design import chain, inverse_design
-from snapmorph.design.inverse import verify_design
+from snapmorph.design.verification import verify_design
 from snapmorph.design.lookup import MapLookup, load_map
 from snapmorph.design.targets import Target, deviation, example_targets, place_rigid
 
@@ -71,7 +71,6 @@ def test_quarter_circle_fast(dm, designs):
     assert sum(not u.is_spacer for u in d.units) >= 1
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("name", list(TARGETS))
 def test_family_meets_tol_by_the_map(dm, designs, name):
     d = _design(designs, dm, name)
@@ -83,7 +82,6 @@ def test_family_meets_tol_by_the_map(dm, designs, name):
         assert sum(u.side for u in arched) * math.copysign(1, turn) > 0
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("name", list(TARGETS))
 def test_family_whole_array_simulation(dm, designs, name):
     """The designed array simulated as a whole (every unit snapped, actuators removed) deviates
@@ -126,7 +124,6 @@ def test_clamped_placement(dm):
     assert np.allclose(place_rigid(local, pts[0], tgt.start_angle), d.predicted, atol=1e-9)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("name", list(TARGETS))
 def test_family_meets_tol_clamped(dm, name):
     """With the start held on the target's start point and tangent, every target of the family

@@ -68,7 +68,6 @@ def test_our_convention_on_the_same_target(dm, paper_S):
     assert 0.35 < (ours.h / ours.L) / (paper.h / paper.L) < 0.55
 
 
-@pytest.mark.slow
 def test_both_conventions_simulated_side_by_side(dm, tmp_path):
     """Both designs simulated as whole arrays: the paper's over-curves (simulated deviation
     above 10 % of the length), ours follows the S within 1.5 %; the figure is written."""

@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 import synthetic_map as sm
-from snapmorph.design import Unit, all_states, chain, forward_kinematics, parse_state
+from snapmorph.design import Unit, chain, forward_kinematics
+from snapmorph.design import all_snap_patterns as all_states
+from snapmorph.design import parse_snapped as parse_state
 from snapmorph.design.shapes import normalise_base, snapped_shape
 
 T, W = 0.5e-3, 5e-3

@@ -10,8 +10,6 @@ from snapmorph.design import Unit, forward_kinematics
 from snapmorph.design.lookup import MapLookup
 from snapmorph.design.shapes import snapped_shape
 
-pytestmark = pytest.mark.slow
-
 #: the map's accuracy targets against direct simulation (issue 4): θ and S/L
 THETA_TOL_DEG, S_TOL = 0.5, 0.002
 

@@ -123,14 +123,17 @@ def test_read_svg_file_flips_y_to_mm(tmp_path):
     pts, tangents = read_target(f)
     assert tangents is None
     assert np.allclose(pts, [[0, -0.1], [0.2, 0.0]])  # y up, m
-    bad = tmp_path / "none.svg"
-    bad.write_text('<svg xmlns="http://www.w3.org/2000/svg"><rect width="5" height="5"/></svg>')
-    with pytest.raises(ValueError, match="no <path"):
-        read_target(bad)
-    broken = tmp_path / "broken.svg"
-    broken.write_text("<svg")
-    with pytest.raises(ValueError, match="not a readable SVG"):
-        read_target(broken)
+    _refused(tmp_path / "none.svg",
+             '<svg xmlns="http://www.w3.org/2000/svg"><rect width="5" height="5"/></svg>',
+             "no <path")
+    _refused(tmp_path / "broken.svg", "<svg", "not a readable SVG")
+
+
+def _refused(path, text, match):
+    """A target file holding `text` is refused with a ValueError matching `match`."""
+    path.write_text(text)
+    with pytest.raises(ValueError, match=match):
+        read_target(path)
 
 
 # ------------------------------------------------------------------------------- DXF
@@ -168,9 +171,6 @@ def test_dxf_refusals(tmp_path):
     doc.saveas(g)
     with pytest.raises(ValueError, match="no LWPOLYLINE"):
         read_target(g)
-    h = tmp_path / "junk.dxf"
-    h.write_text("not a dxf")
-    with pytest.raises(ValueError, match="not a readable DXF"):
-        read_target(h)
+    _refused(tmp_path / "junk.dxf", "not a dxf", "not a readable DXF")
     with pytest.raises(ValueError, match="not found"):
         read_target(tmp_path / "missing.dxf")

@@ -99,7 +99,8 @@ def _units():
 
 
 def test_fk_figures(tmp_path, inspected):
-    from snapmorph.design import all_states, chain
+    from snapmorph.design import all_snap_patterns as all_states
+    from snapmorph.design import chain
     from snapmorph.design.lookup import MapLookup
     from snapmorph.maps import DesignMap
     from snapmorph.plotting.arrays import plot_fk_state, plot_fk_states
@@ -166,7 +167,6 @@ def test_maps_figure(tmp_path, inspected):
     assert not inspected["design_maps.png"], inspected["design_maps.png"]
 
 
-@pytest.mark.slow
 def test_specimens_figure(tmp_path, inspected):
     from snapmorph import figures_specimens
 

@@ -1,6 +1,6 @@
 """Diagnostic variants of the 3-D unit (issue 14): where does the stiff-plate 3-D unit's
 residual against the planar model come from? (docs/unit3d.md, "Agreement with the planar
-model"; `python -m units.studies3d theta_residual 41,81`.)
+model"; `python -m studies.studies3d theta_residual 41,81`.)
 
 A variant is the mesh of `units.unit3d.build_unit_mesh_3d` changed before it is solved:
 
@@ -179,7 +179,7 @@ def run_variant(g, nodes=41, bar_factor=None, bar_modulus=None, bar_torsion=None
     return res
 
 
-#: the variants of the study (`units.studies3d theta_residual`), in the order printed:
+#: the variants of the study (`studies.studies3d theta_residual`), in the order printed:
 #: name -> `run_variant` options. "bars 10 t thick" = the "stiff" plate before the study;
 #: "rigid bars" = bars of thickness t with 1e5 x E (the shipped "stiff" is 1e4 x E).
 VARIANTS = {

@@ -1,6 +1,6 @@
 """Fabrication tolerance: Monte Carlo of hand-made units through the design map.
 
-    from snapmorph.design.tolerance import tolerance
+    from snapmorph.design import tolerance   # this module's `tolerance`
     r = tolerance(units, sigma={"h": 0.5e-3, "L": 0.3e-3, "t": 0.02e-3}, n=1000, seed=0)
     r.envelope_contains(xy), r.free_end_summary(), r.p_bistable
 

@@ -1,12 +1,13 @@
-"""The studies behind docs/unit3d.md (issue 14), runnable from a clean process:
+"""The studies behind docs/unit3d.md (issue 14), runnable from a clean process at the top of a
+checkout:
 
-    .venv/bin/python -m units.studies3d table1   [nodes,...]   # 3-D vs planar, Table 1
-    .venv/bin/python -m units.studies3d tilt     [nodes]       # F_cr knock-down vs tilt
-    .venv/bin/python -m units.studies3d unit2d   [nodes,...]   # 2-D unit, mesh convergence
-    .venv/bin/python -m units.studies3d map2d    [nodes]       # 2-D unit, bistability map
-    .venv/bin/python -m units.studies3d theta_residual [nodes,...] [all|decisive|table1]
+    .venv/bin/python -m studies.studies3d table1   [nodes,...]   # 3-D vs planar, Table 1
+    .venv/bin/python -m studies.studies3d tilt     [nodes]       # F_cr knock-down vs tilt
+    .venv/bin/python -m studies.studies3d unit2d   [nodes,...]   # 2-D unit, mesh convergence
+    .venv/bin/python -m studies.studies3d map2d    [nodes]       # 2-D unit, bistability map
+    .venv/bin/python -m studies.studies3d theta_residual [nodes,...] [all|decisive|table1]
         # where the stiff-plate residual against the planar model comes from
-        # (units/diagnostics3d.py; docs/unit3d.md, "Agreement with the planar model")
+        # (studies/diagnostics3d.py; docs/unit3d.md, "Agreement with the planar model")
 
 Each prints one line per run (SI converted to mm, N, degrees) as it goes.
 """
@@ -126,12 +127,12 @@ PLANAR_REFERENCE_NODES = 641
 
 
 def theta_residual(nodes=(41, 81), which="all"):
-    """F_cr and theta of the 3-D unit's variants (`units.diagnostics3d.VARIANTS`) against the
+    """F_cr and theta of the 3-D unit's variants (`studies.diagnostics3d.VARIANTS`) against the
     converged planar model. ``which``: "all" (every variant at the two specimens),
-    "decisive" (`units.diagnostics3d.DECISIVE`: the mesh convergence), "table1" (the
+    "decisive" (`studies.diagnostics3d.DECISIVE`: the mesh convergence), "table1" (the
     shipped stiff plates and the rigid bars over the six Table 1 specimens)."""
     from snapmorph.units import simulate_unit
-    from snapmorph.units.diagnostics3d import DECISIVE, VARIANTS, run_variant
+    from studies.diagnostics3d import DECISIVE, VARIANTS, run_variant
 
     if which not in ("all", "decisive", "table1"):
         raise SystemExit(f"theta_residual: unknown set {which!r}: all, decisive or table1")

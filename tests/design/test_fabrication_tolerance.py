@@ -1,5 +1,6 @@
-"""design.tolerance: Monte Carlo of fabrication errors through the map, and its envelope
-checked against whole-array simulations of randomly perturbed arrays."""
+"""design.fabrication_tolerance (the function `design.tolerance`): Monte Carlo of fabrication
+errors through the map, and its envelope checked against whole-array simulations of randomly
+perturbed arrays."""
 
 import math
 
@@ -7,7 +8,7 @@ import numpy as np
 import pytest
 
 from snapmorph.design import Unit
-from snapmorph.design.tolerance import check_sigma, perturbed_units, tolerance
+from snapmorph.design.fabrication_tolerance import check_sigma, perturbed_units, tolerance
 
 T, W = 0.5e-3, 5e-3
 THREE = [Unit(L=0.1, h=0.02, t=T, w=W, side=1)] * 3
@@ -93,7 +94,6 @@ def test_plot_and_cli(tmp_path, synthetic_map_path, capsys):
 
 
 # ------------------------------------------------------------------ against whole arrays
-@pytest.mark.slow
 def test_envelope_contains_perturbed_whole_array_simulations():
     """50 randomly perturbed three-unit arrays (independent of the Monte Carlo's samples),
     each simulated whole (design.arrays, released): at least 95 % inside the envelope."""

@@ -1,7 +1,9 @@
 """Figures and tables of the unit's fabrication options (issue 11): the actuator joint
 (`UnitGeometry.joint_length`) and the bond (`UnitGeometry.bond_length`).
 
-    from snapmorph.figures_unit_options import make, joint_table, bond_sweep
+    .venv/bin/python -m studies.unit_options [OUT]   # OUT (default figures/): the figures below
+
+    from studies.unit_options import make, joint_table, bond_sweep
     make("figures")      # figures/unit_bond_length_h10.png, unit_joint_models.png, unit_options.md
 
 - `bond_sweep`: the two h = 10 mm specimens of Table 1 (the paper's model says monostable,
@@ -149,3 +151,10 @@ def make(out, args=None) -> list:
                   + joint_table(joints) + "\n\n![joints](unit_joint_models.png)\n")
     paths.append(md)
     return paths
+
+
+if __name__ == "__main__":  # pragma: no cover
+    import sys
+
+    for written in make(sys.argv[1] if len(sys.argv) > 1 else "figures"):
+        print(f"wrote {written}")
