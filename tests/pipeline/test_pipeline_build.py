@@ -155,6 +155,8 @@ def test_bad_arguments(tmp_path, kwargs, match):
 @pytest.mark.slow
 def test_a_point_that_kills_its_worker_is_recorded(tmp_path, monkeypatch):
     import dask
+    import distributed  # noqa: F401 - its config defaults first: leaving the dask.config.set
+    # below would otherwise drop the whole "distributed" section it created
 
     monkeypatch.setenv("FAKE_SOLVER_CRASH", "0.2 0.0075 0.04")  # os._exit on that point
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
