@@ -183,6 +183,8 @@ class DesignMap:
     Every length is over the base length L; `F_cr` is F_cr L^2 / (E I_arch) with
     I_arch = w t^3 / 12; `theta` and `theta_end` are in degrees. S, theta, theta_end and the
     base shape come from the released state (iii) unless ``state="actuated"``.
+    `status_names` is {code: name} of the statuses the file declares (its ``status``
+    ``flag_values`` / ``flag_meanings``).
     """
 
     #: variables returned by `at` (S, theta, theta_end of the state asked for)

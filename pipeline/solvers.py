@@ -174,8 +174,6 @@ class SolverSpec:
     status_codes: dict = field(default_factory=lambda: {0: "ok", 2: "not_converged", 4: "timeout"})
     failure_statuses: tuple = ("not_converged", "timeout")
     required_when_ok: tuple | None = None
-    required_keys: tuple = ()
-    flag_defaults: dict = field(default_factory=dict)
     options: dict = field(default_factory=dict)
     presets: dict = field(default_factory=dict)
     warm: object = None
@@ -184,17 +182,19 @@ class SolverSpec:
     title: str = ""
     attrs: dict = field(default_factory=dict)
     dim_attrs: dict = field(default_factory=dict)
-    dim_labels: dict = field(default_factory=dict)
     call: str = "keywords"
-    resolve_options: object = None
-    domain: object = None
-    rules: object = None
-    global_attrs: object = None
     finalise: object = None
     empty: object = None
+    resolve_options: object = None
     assemble: object = None
     write: object = None
     validate_file: object = None
+    required_keys: tuple = ()
+    flag_defaults: dict = field(default_factory=dict)
+    dim_labels: dict = field(default_factory=dict)
+    domain: object = None
+    rules: object = None
+    global_attrs: object = None
 
     def __post_init__(self):
         codes = {int(k): str(v) for k, v in self.status_codes.items()}
