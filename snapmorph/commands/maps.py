@@ -356,7 +356,9 @@ def run(args) -> int:
     import warnings
 
     command = getattr(args, "maps_command", None)
-    # warnings (refused checkpoint files, a rebuild and why) as one line each, no source line
+    # warnings (refused checkpoint files, a rebuild and why) as one line each, no source line,
+    # while the command runs
+    plain = warnings.formatwarning
     warnings.formatwarning = lambda message, category, *rest, **kw: f"snapmorph maps: warning: {message}\n"
     try:
         return _dispatch(command, args)
@@ -364,6 +366,8 @@ def run(args) -> int:
         from snapmorph.cli import CommandError
 
         raise CommandError(str(exc)) from None
+    finally:
+        warnings.formatwarning = plain
 
 
 def _dispatch(command, args) -> int:
