@@ -32,6 +32,7 @@ from __future__ import annotations
 import importlib
 import inspect
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -166,7 +167,7 @@ class SolverSpec:
     """
 
     name: str
-    solve: object
+    solve: Callable | str
     dims: tuple
     float_vars: dict
     flag_vars: dict = field(default_factory=dict)
@@ -176,25 +177,25 @@ class SolverSpec:
     required_when_ok: tuple | None = None
     options: dict = field(default_factory=dict)
     presets: dict = field(default_factory=dict)
-    warm: object = None
+    warm: Callable | str | None = None
     sources: tuple = ()
     schema_version: int = 1
     title: str = ""
     attrs: dict = field(default_factory=dict)
     dim_attrs: dict = field(default_factory=dict)
     call: str = "keywords"
-    finalise: object = None
-    empty: object = None
-    resolve_options: object = None
-    assemble: object = None
-    write: object = None
-    validate_file: object = None
+    finalise: Callable | str | None = None
+    empty: Callable | str | None = None
+    resolve_options: Callable | str | None = None
+    assemble: Callable | str | None = None
+    write: Callable | str | None = None
+    validate_file: Callable | str | None = None
     required_keys: tuple = ()
     flag_defaults: dict = field(default_factory=dict)
     dim_labels: dict = field(default_factory=dict)
-    domain: object = None
-    rules: object = None
-    global_attrs: object = None
+    domain: Callable | str | None = None
+    rules: Callable | str | None = None
+    global_attrs: Callable | str | None = None
 
     def __post_init__(self):
         codes = {int(k): str(v) for k, v in self.status_codes.items()}
