@@ -34,7 +34,7 @@ def main() -> None:
 
     from snapmorph.pipeline.build import build_map
     from snapmorph.pipeline.checkpoint import checkpoint_dir
-    from snapmorph.pipeline.grid import preset
+    from snapmorph.pipeline import preset
 
     grid = preset("ci")
     with tempfile.TemporaryDirectory(prefix="snapmorph-bench-") as tmp:

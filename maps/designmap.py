@@ -23,9 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from snapmorph.pipeline.schema import (
-    BISTABLE_ONLY, FLAG_VARS, GRID_DIMS, OPTIONAL_VARS, READABLE_VERSIONS, RELEASED_VARS,
-    REQUIRED_ATTRS, REQUIRED_VARS, REQUIRED_VARS_V1, SCHEMA_VERSION, STATES, STATUS_CODES,
+from snapmorph.maps.schema import (
+    BISTABLE_ONLY, FLAG_VARS, FORCE_STATUSES, GRID_DIMS, OK_STATUS, PENDING_STATUS,
+    READABLE_VERSIONS, RELEASED_VARS, REQUIRED_ATTRS, REQUIRED_VARS, REQUIRED_VARS_V1,
+    SCHEMA_VERSION, STATES, status_names,
 )
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
@@ -157,14 +158,23 @@ def _validate(ds, path) -> None:
         _fail(path, f"dimension xz has size {ds.sizes['xz']}, expected 2")
     if not np.issubdtype(ds["status"].dtype, np.integer):
         _fail(path, f"status has dtype {ds['status'].dtype}, expected an integer (no _FillValue)")
+    try:
+        names = status_names(ds["status"].attrs)
+    except ValueError as exc:
+        _fail(path, str(exc))
     status = ds["status"].values
-    unknown = set(np.unique(status).tolist()) - set(STATUS_CODES)
+    unknown = set(np.unique(status).tolist()) - set(names)
     if unknown:
         _fail(path, f"status holds unknown codes {sorted(unknown)}")
-    pending = int(np.count_nonzero(status < 0))
+    pending = int(np.count_nonzero(np.isin(status, _codes(names, (PENDING_STATUS,)))))
     if pending:
         _fail(path, f"{pending} points are still pending: a partial build, not a finished map")
-    return version
+    return version, names
+
+
+def _codes(names: dict, wanted) -> list:
+    """The codes of the statuses named ``wanted`` in a file's {code: name}."""
+    return [code for code, name in names.items() if name in wanted]
 
 
 class DesignMap:
@@ -173,6 +183,8 @@ class DesignMap:
     Every length is over the base length L; `F_cr` is F_cr L^2 / (E I_arch) with
     I_arch = w t^3 / 12; `theta` and `theta_end` are in degrees. S, theta, theta_end and the
     base shape come from the released state (iii) unless ``state="actuated"``.
+    `status_names` is {code: name} of the statuses the file declares (its ``status``
+    ``flag_values`` / ``flag_meanings``).
     """
 
     #: variables returned by `at` (S, theta, theta_end of the state asked for)
@@ -181,7 +193,7 @@ class DesignMap:
     def __init__(self, ds, path=None):
         from scipy.interpolate import RegularGridInterpolator as RGI
 
-        self.schema_version = _validate(ds, path)
+        self.schema_version, self.status_names = _validate(ds, path)
         if self.schema_version < 2:
             warnings.warn(f"design map {path or '<in memory>'} has schema version "
                           f"{self.schema_version}: it holds no released state (only "
@@ -193,11 +205,11 @@ class DesignMap:
         # interpolation coordinates: (h, log t, log w)
         self._icoords = (self._axes[0], np.log(self._axes[1]), np.log(self._axes[2]))
         self._status = np.asarray(ds["status"].values)
-        ok = self._status == 0
+        ok = np.isin(self._status, _codes(self.status_names, (OK_STATUS,)))
         standing = ok & (np.asarray(ds["self_standing"].values) == 1)
         bistable_vars = [v for v in BISTABLE_ONLY if v in ds.variables]
-        groups = {"F": (list(_F_VARS), ok | (self._status == 1) | (self._status == 5)),
-                  "bi": (bistable_vars, ok.copy())}
+        force = np.isin(self._status, _codes(self.status_names, FORCE_STATUSES))
+        groups = {"F": (list(_F_VARS), force), "bi": (bistable_vars, ok.copy())}
         if self.schema_version >= 2:
             groups["rel"] = (list(RELEASED_VARS), standing.copy())
         self._interp = {}
@@ -336,7 +348,7 @@ class DesignMap:
             i = int(np.clip(np.searchsorted(c, q, side="right") - 1, 0, c.size - 2))
             idx.append((i, i + 1))
         codes = {int(self._status[a, b, c]) for a in idx[0] for b in idx[1] for c in idx[2]}
-        return ", ".join(STATUS_CODES[c] for c in sorted(codes))
+        return ", ".join(self.status_names[c] for c in sorted(codes))
 
     def _group(self, group, shape, x, allow_nan):
         names, rgi, bad_rgi, _ = self._interp[group]

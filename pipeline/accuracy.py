@@ -69,7 +69,7 @@ def check_nodes(dm, solve, resolution, b, k: int = 3, seed: int = 1, rtol: float
 def measure(dm, n: int = 50, seed: int = 0, solve=None, max_tries: int = 100000) -> Accuracy:
     """Compare `dm` with direct simulations at n random off-grid points away from the boundary
     (after checking that the map still reproduces the solver at a few grid points)."""
-    from snapmorph.pipeline.point import solve_point
+    from snapmorph.pipeline.kinds.unit import solve_point
 
     solve = solve or solve_point
     rng = np.random.default_rng(seed)

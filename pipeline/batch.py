@@ -2,30 +2,20 @@
 
 A *block* is a dict of arrays for a set of points: "index" (int64 flat grid index), "coords"
 (n, ndim) the points' grid values, one array per schema variable (floats, int8 flags and
-status), the array variables (n, *extra shape; the unit's "base_shape" (n, M, 2)),
+status), the array variables (n, *extra shape; the planar unit's "base_shape" (n, M, 2)),
 "solve_time" (s) and "message" (str, why a point failed). Blocks are what tasks return, what
 checkpoint files hold, and (for all points) what the driver assembles into the dataset. The keys
-of a kind's blocks are `SolverSpec.block_keys()`; the functions without a `spec` argument are
-the planar unit's (kept for callers of the schema-1 API).
+of a kind's blocks are `SolverSpec.block_keys()`.
 """
 
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 
-from snapmorph.pipeline.schema import FLAG_VARS, FLOAT_VARS, PENDING
-from snapmorph.pipeline.solvers import resolve
-
-INT_VARS = (*FLAG_VARS, "status")
-BLOCK_KEYS = ("index", *FLOAT_VARS, *INT_VARS, "base_shape", "solve_time", "message")
-
-
-def _unit():
-    from snapmorph.pipeline.solvers import get_spec
-
-    return get_spec("unit")
+from snapmorph.pipeline.solvers import PENDING, get_spec, resolve
 
 
 def new_block(spec, indices, options: dict, coords=None) -> dict:
@@ -37,11 +27,9 @@ def new_block(spec, indices, options: dict, coords=None) -> dict:
                        else np.asarray(coords, dtype=float).reshape(n, len(spec.dims)).copy())
     for name in spec.float_vars:
         block[name] = np.full(n, np.nan)
-    for name in spec.int_vars:
-        block[name] = np.full(n, -1, dtype=np.int8)
-    if "bistable" in block:
-        block["bistable"][:] = 0
-    block["status"][:] = PENDING
+    for name in spec.flag_vars:
+        block[name] = np.full(n, spec.flag_defaults.get(name, -1), dtype=np.int8)
+    block["status"] = np.full(n, PENDING, dtype=np.int8)
     for name in spec.array_vars:
         block[name] = np.full((n, *spec.array_shape(name, options)), np.nan)
     block["solve_time"] = np.full(n, np.nan)
@@ -50,8 +38,9 @@ def new_block(spec, indices, options: dict, coords=None) -> dict:
 
 
 def empty_block(indices, samples: int) -> dict:
-    """A planar-unit block for `indices` with every point pending (status -1) and NaN fields."""
-    return new_block(_unit(), indices, {"samples": samples})
+    """Deprecated: `new_block(get_spec("unit"), indices, {"samples": samples})`."""
+    _deprecated("empty_block", 'new_block(get_spec("unit"), indices, {"samples": samples})')
+    return new_block(get_spec("unit"), indices, {"samples": samples})
 
 
 def put(block: dict, k: int, rec: dict, solve_time: float) -> None:
@@ -119,26 +108,6 @@ def check_block(block: dict, spec, options: dict, points: np.ndarray) -> None:
                              f"point(s) with status ok")
 
 
-def validate_block(block: dict, n_points: int, samples: int) -> None:
-    """Raise ValueError if `block` is not a well-formed planar-unit block for a grid of n_points
-    (shapes, index range, no pending points)."""
-    spec = _unit()
-    keys = [k for k in spec.block_keys() if k != "coords"]
-    missing = [k for k in keys if k not in block]
-    if missing:
-        raise ValueError(f"missing keys {missing}")
-    idx = np.asarray(block["index"])
-    n = idx.size
-    if idx.ndim != 1 or n == 0 or idx.min() < 0 or idx.max() >= n_points:
-        raise ValueError(f"bad index array (grid has {n_points} points)")
-    for key in keys[1:]:
-        expected = (n, samples, 2) if key == "base_shape" else (n,)
-        if np.shape(block[key]) != expected:
-            raise ValueError(f"{key} has shape {np.shape(block[key])}, expected {expected}")
-    if np.any(np.asarray(block["status"]) < 0):
-        raise ValueError("block holds pending points")
-
-
 def resolve_solver(solve):
     """A callable, or "module:function" naming one (importable on the workers)."""
     if callable(solve):
@@ -182,10 +151,10 @@ def solve_points(indices, coords, spec, options: dict, solve, time_limit=None) -
 
 def solve_batch(indices, coords, b_over_L: float, resolution, samples: int, solve,
                 time_limit=None) -> dict:
-    """Planar unit: solve the points `coords` ((n, 3) of h/L, t/L, w/L) with flat indices
-    `indices` (see `solve_points`)."""
+    """Deprecated: `solve_points` with the planar unit's spec and options."""
+    _deprecated("solve_batch", 'solve_points(indices, coords, get_spec("unit"), options, solve)')
     options = {"b_over_L": b_over_L, "resolution": resolution, "samples": samples}
-    return solve_points(indices, coords, _unit(), options, solve, time_limit)
+    return solve_points(indices, coords, get_spec("unit"), options, solve, time_limit)
 
 
 def timeout_record(spec, options: dict, time_limit: float, what: str) -> dict:
@@ -194,6 +163,10 @@ def timeout_record(spec, options: dict, time_limit: float, what: str) -> dict:
                              f"exceeded the wall-time limit of {time_limit:g} s per point ({what})")
 
 
-__all__ = ["new_block", "empty_block", "put", "merge", "check_block", "validate_block",
-           "resolve_solver", "solver_name", "solve_points", "solve_batch", "timeout_record",
-           "INT_VARS", "BLOCK_KEYS"]
+def _deprecated(old: str, new: str) -> None:
+    warnings.warn(f"pipeline.batch.{old} is deprecated (snapmorph 0.2); use {new}",
+                  DeprecationWarning, stacklevel=3)
+
+
+__all__ = ["new_block", "put", "merge", "check_block", "resolve_solver", "solver_name",
+           "solve_points", "timeout_record"]

@@ -26,15 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
-from snapmorph.pipeline.batch import (merge, new_block, put, resolve_solver, solve_points, solver_name,
-                            timeout_record, check_block)
+from snapmorph.units import status as unit_status
+from snapmorph.pipeline import dataset
+from snapmorph.pipeline.batch import (check_block, merge, new_block, put, resolve_solver, solve_points,
+                                      solver_name, timeout_record)
 from snapmorph.pipeline.checkpoint import Checkpoint, checkpoint_dir
-from snapmorph.pipeline.fingerprint import (build_inputs, canonical, differences, fingerprint, solver_modules,
-                                  source_hash, source_provenance)
-from snapmorph.pipeline.grid import Grid
-from snapmorph.pipeline.point import solve_point, warm_up
-from snapmorph.pipeline.schema import PENDING
-from snapmorph.pipeline.solvers import get_spec
+from snapmorph.pipeline.fingerprint import (build_inputs, canonical, differences, fingerprint,
+                                            solver_modules, source_hash, source_provenance)
+from snapmorph.pipeline.solvers import PENDING, get_spec
 
 _DEFAULT = object()
 MAX_BATCH = 20  # points per task: a few seconds of work, well above dask's ~2 ms per task
@@ -74,7 +73,7 @@ class BuildReport:
     failed: int = 0  # points whose status is a failure of the kind (not_converged, timeout, ...)
     refused: list = field(default_factory=list)  # (checkpoint file, reason) refused on resume
     status_names: dict = field(default_factory=dict)  # code -> name of the kind's statuses
-    dims: tuple = ("h_over_L", "t_over_L", "w_over_L")
+    dims: tuple = ()  # the grid's dimensions (the failures' coordinates)
     time_limit: float | None = None
 
     @property
@@ -90,7 +89,7 @@ class BuildReport:
         return self.fanout_time / ideal if ideal > 0 else math.nan
 
     def _counts(self) -> str:
-        names = self.status_names or _unit_status_names()
+        names = self.status_names or unit_status.NAME
         return ", ".join(f"{names.get(k, k)} {v}" for k, v in sorted(self.status_counts.items()))
 
     def summary(self) -> str:
@@ -111,19 +110,13 @@ class BuildReport:
         if self.refused:
             lines.append(f"refused {len(self.refused)} checkpoint file(s) (points recomputed): "
                          + "; ".join(f"{n}: {r}" for n, r in self.refused[:5]))
-        names = self.status_names or _unit_status_names()
+        names = self.status_names or unit_status.NAME
         for *coords, status, msg in self.failures:
             where = ", ".join(f"{d.replace('_over_', '/')}={c:g}" for d, c in zip(self.dims, coords))
             lines.append(f"  {names.get(status, status)} at {where}: {msg}")
         if self.failed > len(self.failures):
             lines.append(f"  ... and {self.failed - len(self.failures)} more failed points (status in the map)")
         return "\n".join(lines)
-
-
-def _unit_status_names() -> dict:
-    from snapmorph.pipeline.schema import STATUS_CODES
-
-    return dict(STATUS_CODES)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -314,16 +307,15 @@ def _batches(todo: np.ndarray, batch_size: int):
     return [todo[i:i + batch_size] for i in range(0, todo.size, batch_size)]
 
 
-def open_checkpoint(out, grid, solve=solve_point, restart: bool = False, *, kind="unit",
+def open_checkpoint(out, grid, solve=None, restart: bool = False, *, kind="unit",
                     identity=None) -> Checkpoint:
     """The checkpoint of a build of `grid` into `out` (created, or resumed), recording the
-    build's inputs and fingerprint, and the provenance of the model source. identity: the
-    build's (spec, options, inputs, fingerprint) if already computed."""
-    from snapmorph.pipeline.dataset import package_version
-
+    build's inputs and fingerprint, and the provenance of the model source. solve: the point
+    solver (default the kind's); identity: the build's (spec, options, inputs, fingerprint) if
+    already computed."""
     spec, options, inputs, fp = identity or build_identity(grid, solve, kind)
     prov = {**source_provenance(solver_modules(spec, resolve_solver(solve if solve is not None else spec.solve))),
-            "package_version": package_version(), "resolution": options.get("resolution")}
+            "package_version": dataset.package_version(), "resolution": options.get("resolution")}
     return Checkpoint.open(out, grid, inputs["solver"], prov, restart=restart, spec=spec,
                            inputs=inputs, fingerprint=fp)
 
@@ -342,9 +334,9 @@ def build_map(grid, out, *, solve=_DEFAULT, kind="unit", warm=_DEFAULT, schedule
     kind: registered point-solver kind (`pipeline.solvers`; default "unit", the planar unit);
     solve: point solver (callable or "module:function", importable on the workers; default the
       kind's);
-    warm: warm-up callable run once in this process and once on every worker before the fan-out
-      (default: the kind's warm-up when solve is the kind's solver, else none); the planar unit's
-      takes the resolution, other kinds' the model options;
+    warm: warm-up callable, given the resolved model options, run once in this process and once
+      on every worker before the fan-out (default: the kind's warm-up when solve is the kind's
+      solver, else none);
     scheduler: address or scheduler-file of an existing cluster (default: env
       DASK_SCHEDULER_ADDRESS, else a LocalCluster of `workers` single-threaded processes, one
       per core by default); with a scheduler, `workers` is how many workers to wait for;
@@ -362,8 +354,6 @@ def build_map(grid, out, *, solve=_DEFAULT, kind="unit", warm=_DEFAULT, schedule
     """
     t_start = time.perf_counter()
     spec = get_spec(kind)
-    if spec.name == "unit" and not isinstance(grid, Grid):
-        raise ValueError(f"grid must be a pipeline.grid.Grid, got {type(grid).__name__}")
     spec.check_grid(grid)
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
@@ -382,7 +372,7 @@ def build_map(grid, out, *, solve=_DEFAULT, kind="unit", warm=_DEFAULT, schedule
     fn = resolve_solver(solve)  # fail now, not on the workers, if it does not resolve
     own_solver = fn is resolve_solver(spec.solve)
     if warm is _DEFAULT:
-        warm = (warm_up if spec.name == "unit" else resolve_solver(spec.warm)) if own_solver and spec.warm else None
+        warm = spec.hook("warm") if own_solver else None
     out = check_output_path(out)
     address = _scheduler_address(scheduler)
     if address and address.endswith(".json") and not Path(address).is_file():
@@ -454,8 +444,6 @@ def _report(out, spec, grid, status, total, t_start, up_to_date=False, fingerpri
 def _write_and_verify(spec, grid, options, inputs, fp, meta, total, coords, out, keep_solve_time):
     """Validate the assembled results, write the map atomically, read it back and check it
     before the caller deletes the checkpoint."""
-    from snapmorph.pipeline.solvers import resolve
-
     try:
         check_block(total, spec, options, coords)
     except ValueError as exc:
@@ -463,12 +451,11 @@ def _write_and_verify(spec, grid, options, inputs, fp, meta, total, coords, out,
                            f"{checkpoint_dir(out)} is kept") from None
     if not keep_solve_time:
         total = {**total, "solve_time": np.full(total["solve_time"].shape, np.nan)}
-    attrs = {"created": meta.get("created", "unknown"), "package_version": meta.get("package_version", "unknown"),
-             "git_commit": meta.get("git_commit", "unknown"), "model_options": options}
-    if spec.assemble:
-        ds = resolve(spec.assemble)(grid, total, attrs, spec)
+    prov = {k: meta.get(k, "unknown") for k in ("created", "package_version", "git_commit")}
+    if spec.assemble:  # a kind's own Dataset (its hook's historical call)
+        ds = spec.hook("assemble")(grid, total, {**prov, "model_options": options}, spec)
     else:
-        ds = generic_dataset(spec, grid, total, attrs)
+        ds = dataset.assemble(spec, grid, total, options, prov)
     ds.attrs.update({
         "kind": spec.name,
         "inputs_sha256": fp,
@@ -480,14 +467,12 @@ def _write_and_verify(spec, grid, options, inputs, fp, meta, total, coords, out,
         ds["solve_time"].attrs["comment"] = (
             "not stored (NaN): wall times differ between runs and would make rebuilds differ; "
             "build with --keep-solve-time to store them")
-    (resolve(spec.write) if spec.write else write_generic_netcdf)(ds, out)
+    (spec.hook("write") or dataset.write_netcdf)(ds, out)
     _verify_written(spec, out, ds, fp)
 
 
 def _verify_written(spec, out, ds, fp) -> None:
     import xarray as xr
-
-    from snapmorph.pipeline.solvers import resolve
 
     with xr.open_dataset(out, engine="netcdf4") as back:
         back = back.load()
@@ -498,92 +483,7 @@ def _verify_written(spec, out, ds, fp) -> None:
                 if np.asarray(ds[name].values).dtype.kind == "f" else \
                 not np.array_equal(np.asarray(back[name].values), np.asarray(ds[name].values)):
             raise RuntimeError(f"{out} was written but its variable {name} does not read back as written")
-    if spec.validate_file:
-        resolve(spec.validate_file)(out)
-    else:
-        validate_generic_file(spec, out)
-
-
-# ---------------------------------------------------------------------------------------------
-# Maps of kinds without their own writer
-
-def generic_dataset(spec, grid, total: dict, attrs: dict):
-    """The xarray Dataset of a block over all points of a kind without its own assembler:
-    grid dims from `spec.dims`, extra dims of the array variables, CF units / long_name,
-    status flag_values / flag_meanings."""
-    import xarray as xr
-
-    shape = grid.shape
-    order = np.argsort(total["index"])
-    if not np.array_equal(total["index"][order], np.arange(grid.size)):
-        raise ValueError(f"result block does not cover the {grid.size} grid points exactly once")
-    options = attrs["model_options"]
-    coords = {}
-    for d, values in grid.axes.items():
-        units, long_name = spec.dim_attrs.get(d, ("1", d))
-        coords[d] = (d, np.asarray(values), {"units": units, "long_name": long_name})
-    data = {}
-    for name, (units, long_name) in spec.float_vars.items():
-        data[name] = (spec.dims, total[name][order].reshape(shape), {"units": units, "long_name": long_name})
-    for name, (units, long_name) in spec.flag_vars.items():
-        data[name] = (spec.dims, total[name][order].astype(np.int8).reshape(shape),
-                      {"units": units, "long_name": long_name})
-    codes = spec.all_codes
-    data["status"] = (spec.dims, total["status"][order].astype(np.int8).reshape(shape), {
-        "units": "1", "long_name": "status of the simulation of the point",
-        "flag_values": np.array(sorted(codes), dtype=np.int8),
-        "flag_meanings": " ".join(codes[k] for k in sorted(codes))})
-    for name, (extra, _, units, long_name) in spec.array_vars.items():
-        ex = spec.array_shape(name, options)
-        for d, n in zip(extra, ex):
-            if d not in coords:
-                coords[d] = (d, np.arange(n, dtype=np.int32), {"units": "1", "long_name": f"index along {d}"})
-        data[name] = ((*spec.dims, *extra), total[name][order].reshape(*shape, *ex),
-                      {"units": units, "long_name": long_name})
-    data["solve_time"] = (spec.dims, total["solve_time"][order].reshape(shape),
-                          {"units": "s", "long_name": "wall time of the simulation of the point"})
-    gattrs = {"title": f"{spec.title or 'snapmorph map of kind ' + spec.name} (grid {grid.name})",
-              "schema_version": np.int32(spec.schema_version), "grid": grid.name,
-              "package_version": attrs["package_version"], "git_commit": attrs["git_commit"],
-              "created": attrs["created"], "model_options": canonical(options), **spec.attrs}
-    return xr.Dataset(data, coords=coords, attrs=gattrs)
-
-
-def write_generic_netcdf(ds, path) -> None:
-    """Write `ds` as compressed netCDF4 atomically; integer variables without _FillValue."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    enc = {}
-    for name, var in ds.variables.items():
-        if name in ds.coords:
-            enc[name] = {"_FillValue": None}
-        elif np.issubdtype(var.dtype, np.integer):
-            enc[name] = {"zlib": True, "complevel": 4, "shuffle": True, "_FillValue": None}
-        else:
-            enc[name] = {"zlib": True, "complevel": 4, "shuffle": True, "_FillValue": np.nan}
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.partial")
-    try:
-        ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=enc)
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
-def validate_generic_file(spec, path) -> None:
-    """Raise ValueError unless `path` holds a finished map of kind `spec`."""
-    import xarray as xr
-
-    with xr.open_dataset(path, engine="netcdf4") as ds:
-        missing = [v for v in (*spec.float_vars, *spec.flag_vars, "status", *spec.array_vars) if v not in ds]
-        if missing:
-            raise ValueError(f"map {path} lacks variables {missing}")
-        status = np.asarray(ds["status"].values)
-    unknown = set(np.unique(status).tolist()) - set(spec.status_codes)
-    if unknown:
-        raise ValueError(f"map {path} holds unknown or pending status codes {sorted(unknown)}")
+    dataset.check_file(spec, out)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -597,14 +497,13 @@ def _fan_out(spec, options, coords, todo, total, ckpt, solve, warm, scheduler, w
     from tqdm import tqdm
 
     local = not _scheduler_address(scheduler)
-    warm_arg = options.get("resolution") if spec.name == "unit" else options
     t0 = time.perf_counter()
     if warm is not None and local:
-        warm(warm_arg)  # compile once here so the workers load the numba cache
+        warm(options)  # compile once here so the workers load the numba cache
     client, cluster, n_workers = _connect(scheduler, workers, timeout, connect_timeout)
     try:
         if warm is not None:
-            client.run(warm, warm_arg)
+            client.run(warm, options)
         stats["startup"] = time.perf_counter() - t0
         if batch_size is None:
             batch_size = max(1, min(MAX_BATCH, math.ceil(todo.size / (n_workers * TASKS_PER_WORKER))))

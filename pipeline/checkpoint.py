@@ -103,19 +103,16 @@ class Checkpoint:
 
     @classmethod
     def open(cls, out, grid, solver: str, new_meta: dict, restart: bool = False, *,
-             spec=None, inputs: dict | None = None, fingerprint: str | None = None) -> "Checkpoint":
-        """Open (resume) or create the checkpoint of `out`.
+             spec, inputs: dict, fingerprint: str) -> "Checkpoint":
+        """Open (resume) or create the checkpoint of `out` (`pipeline.build.open_checkpoint`
+        computes the arguments).
 
         new_meta: provenance to record if starting afresh ("created", "package_version",
         "git_commit") and the "resolution" the solver will use; spec / inputs / fingerprint:
-        the kind and the build's inputs (`pipeline.fingerprint`; computed for the planar unit
-        when omitted). restart: discard an existing checkpoint. Raises CheckpointError if the
-        existing one was made for other inputs, or if another build holds it.
+        the kind and the build's inputs (`pipeline.fingerprint`). restart: discard an existing
+        checkpoint. Raises CheckpointError if the existing one was made for other inputs, or if
+        another build holds it.
         """
-        if inputs is None or fingerprint is None or spec is None:
-            from snapmorph.pipeline.build import build_identity
-
-            spec, _, inputs, fingerprint = build_identity(grid, solver, spec)
         d = checkpoint_dir(out)
         d.mkdir(parents=True, exist_ok=True)
         fd = os.open(d / "lock", os.O_RDWR | os.O_CREAT, 0o644)

@@ -1,7 +1,10 @@
-"""Assemble a block over all grid points into the schema-2 xarray Dataset and write it.
+"""The map file of any kind: assemble a block over all grid points into an xarray Dataset and
+write it as compressed netCDF4, atomically.
 
-The assembler does no physics: it reshapes, labels (CF `units`, `long_name`, status flags) and
-writes compressed netCDF4 atomically.
+The assembler does no physics: it reshapes, labels (CF `units`, `long_name`, status
+`flag_values` / `flag_meanings` from the kind's status codes) and adds the global attributes.
+The file's bytes are decided here and by the kind's spec, never by the clock: see
+`pipeline.build` for what a build records.
 """
 
 from __future__ import annotations
@@ -9,18 +12,17 @@ from __future__ import annotations
 import datetime as _dt
 import os
 import subprocess
+from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from snapmorph.pipeline.batch import INT_VARS
-from snapmorph.pipeline.grid import Grid
-from snapmorph.pipeline.point import E_REF, L_REF, model_options
-from snapmorph.pipeline.schema import (
-    COORD_ATTRS, FLAG_VARS, FLOAT_VARS, GRID_DIMS, NORMALISATION, SCHEMA_VERSION, SHAPE_ATTRS,
-    SHAPE_VARS, SOLVE_TIME_ATTRS, STATUS_ATTRS,
-)
+from snapmorph.maps.schema import SOLVE_TIME_ATTRS, status_attrs
+from snapmorph.pipeline.fingerprint import canonical
+
+#: the package version recorded in a map when the installed metadata says none
+UNKNOWN_VERSION = "unknown"
 
 
 def utc_now() -> str:
@@ -40,9 +42,11 @@ def git_commit() -> str:
 
 
 def package_version() -> str:
-    from snapmorph import __version__
-
-    return __version__
+    """The installed snapmorph's version (its distribution metadata)."""
+    try:
+        return metadata.version("snapmorph")
+    except metadata.PackageNotFoundError:
+        return UNKNOWN_VERSION
 
 
 def provenance() -> dict:
@@ -50,55 +54,49 @@ def provenance() -> dict:
     return {"created": utc_now(), "package_version": package_version(), "git_commit": git_commit()}
 
 
-def global_attrs(grid: Grid, prov: dict) -> dict:
-    """The schema's global attributes for a map of `grid` built with provenance `prov`."""
-    return {
-        "title": f"snapmorph design map of the bistable arch-on-base unit (grid {grid.name})",
-        "schema_version": np.int32(SCHEMA_VERSION),
-        "grid": grid.name,
-        "b_over_L": float(grid.b_over_L),
-        # the resolution used (prov["resolution"], the solver default resolved at the start);
-        # netCDF has no None: -1 means "the solver's default, which it did not state"
-        "resolution": np.int32(_resolution(grid, prov)),
-        "package_version": prov["package_version"],
-        "git_commit": prov["git_commit"],
-        "created": prov["created"],
-        "normalisation": NORMALISATION,
-        "E_reference": float(E_REF),
-        "L_reference": float(L_REF),
-        **model_options(),
-    }
+def generic_attrs(spec, grid, options: dict, provenance: dict) -> dict:
+    """The global attributes of a map of a kind without its own `global_attrs` hook."""
+    return {"title": f"{spec.title or 'snapmorph map of kind ' + spec.name} (grid {grid.name})",
+            "schema_version": np.int32(spec.schema_version), "grid": grid.name,
+            "package_version": provenance["package_version"], "git_commit": provenance["git_commit"],
+            "created": provenance["created"], "model_options": canonical(options), **spec.attrs}
 
 
-def _resolution(grid: Grid, prov: dict) -> int:
-    r = prov.get("resolution", grid.resolution)
-    return -1 if r is None else int(r)
-
-
-def assemble(grid: Grid, total: dict, attrs: dict) -> xr.Dataset:
-    """The Dataset of a block `total` over all points (index = arange(grid.size))."""
+def assemble(spec, grid, total: dict, options: dict, provenance: dict) -> xr.Dataset:
+    """The Dataset of the block `total` over all points of `grid` (index = arange(grid.size))
+    of kind `spec` built with the resolved model `options`; `provenance` holds "created",
+    "package_version" and "git_commit". Coordinates and variables carry CF `units` and
+    `long_name`; extra dimensions of the array variables get their `dim_labels` (else
+    0, 1, ...)."""
     shape = grid.shape
-    coords = {
-        "h_over_L": ("h_over_L", np.asarray(grid.h_over_L), COORD_ATTRS["h_over_L"]),
-        "t_over_L": ("t_over_L", np.asarray(grid.t_over_L), COORD_ATTRS["t_over_L"]),
-        "w_over_L": ("w_over_L", np.asarray(grid.w_over_L), COORD_ATTRS["w_over_L"]),
-        "sample": ("sample", np.arange(grid.samples, dtype=np.int32), COORD_ATTRS["sample"]),
-        "xz": ("xz", np.array(["x", "z"]), COORD_ATTRS["xz"]),
-    }
     order = np.argsort(total["index"])
     if not np.array_equal(total["index"][order], np.arange(grid.size)):
         raise ValueError(f"result block does not cover the {grid.size} grid points exactly once")
+
+    def coord(dim, values):
+        units, long_name = spec.dim_attrs.get(dim, ("1", dim if dim in spec.dims else f"index along {dim}"))
+        return (dim, values, {"units": units, "long_name": long_name})
+
+    coords = {d: coord(d, np.asarray(v)) for d, v in grid.axes.items()}
     data = {}
-    for name, (units, long_name) in FLOAT_VARS.items():
-        data[name] = (GRID_DIMS, total[name][order].reshape(shape), {"units": units, "long_name": long_name})
-    for name, (units, long_name) in FLAG_VARS.items():
-        data[name] = (GRID_DIMS, total[name][order].astype(np.int8).reshape(shape),
+    for name, (units, long_name) in spec.float_vars.items():
+        data[name] = (spec.dims, total[name][order].reshape(shape), {"units": units, "long_name": long_name})
+    for name, (units, long_name) in spec.flag_vars.items():
+        data[name] = (spec.dims, total[name][order].astype(np.int8).reshape(shape),
                       {"units": units, "long_name": long_name})
-    data["status"] = (GRID_DIMS, total["status"][order].astype(np.int8).reshape(shape), dict(STATUS_ATTRS))
-    for name in SHAPE_VARS:
-        data[name] = ((*GRID_DIMS, "sample", "xz"),
-                      total[name][order].reshape(*shape, grid.samples, 2), dict(SHAPE_ATTRS[name]))
-    data["solve_time"] = (GRID_DIMS, total["solve_time"][order].reshape(shape), dict(SOLVE_TIME_ATTRS))
+    data["status"] = (spec.dims, total["status"][order].astype(np.int8).reshape(shape),
+                      status_attrs(spec.all_codes))
+    for name, (extra, _, units, long_name) in spec.array_vars.items():
+        sizes = spec.array_shape(name, options)
+        for d, n in zip(extra, sizes):
+            if d not in coords:
+                labels = spec.dim_labels.get(d)
+                coords[d] = coord(d, np.arange(n, dtype=np.int32) if labels is None else np.array(labels))
+        data[name] = ((*spec.dims, *extra), total[name][order].reshape(*shape, *sizes),
+                      {"units": units, "long_name": long_name})
+    data["solve_time"] = (spec.dims, total["solve_time"][order].reshape(shape), dict(SOLVE_TIME_ATTRS))
+    hook = spec.hook("global_attrs")
+    attrs = hook(grid, options, provenance) if hook else generic_attrs(spec, grid, options, provenance)
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
@@ -108,7 +106,7 @@ def encoding(ds: xr.Dataset) -> dict:
     for name, var in ds.variables.items():
         if name in ds.coords:
             enc[name] = {"_FillValue": None}
-        elif name in INT_VARS:
+        elif np.issubdtype(var.dtype, np.integer):
             enc[name] = {"zlib": True, "complevel": 4, "shuffle": True, "_FillValue": None}
         else:
             enc[name] = {"zlib": True, "complevel": 4, "shuffle": True, "_FillValue": np.nan}
@@ -130,4 +128,21 @@ def write_netcdf(ds: xr.Dataset, path) -> None:
             tmp.unlink()
 
 
-__all__ = ["assemble", "write_netcdf", "global_attrs", "provenance"]
+def check_file(spec, path) -> None:
+    """Raise ValueError unless `path` holds a finished map of kind `spec`: the kind's own check
+    first (`validate_file`, whose messages know its schema), then every variable, known status
+    codes, none pending."""
+    own = spec.hook("validate_file")
+    if own:
+        own(path)
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        missing = [v for v in (*spec.float_vars, *spec.flag_vars, "status", *spec.array_vars) if v not in ds]
+        if missing:
+            raise ValueError(f"map {path} lacks variables {missing}")
+        status = np.asarray(ds["status"].values)
+    unknown = set(np.unique(status).tolist()) - set(spec.status_codes)
+    if unknown:
+        raise ValueError(f"map {path} holds unknown or pending status codes {sorted(unknown)}")
+
+
+__all__ = ["assemble", "write_netcdf", "check_file", "provenance", "package_version"]

@@ -1,21 +1,25 @@
-"""Point solvers the pipeline can map, each with its own schema section: the registry.
+"""The kinds of map the pipeline can build, each a point solver with its own schema section: the
+registry, the grid, and the one record finaliser.
 
 A `SolverSpec` says everything the pipeline needs to fan a point solver out over a grid and
 write its map: the grid dimensions, the variables it returns (floats, int8 flags, arrays with
 extra dimensions), its status codes and which of them are failures, its model options, its
-grid presets, and the source code whose content determines its results (hashed into the
-build's fingerprint, see `pipeline.fingerprint`).
+grid presets, and the modules whose source determines its results (hashed into the build's
+fingerprint, see `pipeline.fingerprint`). A `MapGrid` is a grid of any kind: named axes and
+model options.
 
     from snapmorph.pipeline.solvers import get_spec
-    spec = get_spec("unit")            # the planar unit (the default); "unit2d" once registered
+    spec = get_spec("unit")            # the planar unit (the default); "unit2d" the 2-D unit
     grid = spec.preset("ci")
 
-Registered kinds: "unit" here; "unit2d" is looked up lazily as `units.unit2d:MAP_SPEC`
-(`KNOWN`), so that the module defining it needs no edit here. Any "module:ATTRIBUTE" naming a
-SolverSpec also works (tests use it), and `register(spec)` adds one at run time in this process
-(dask workers receive the spec itself, pickled, so they do not need the registry).
+Every kind is a plug-in: a module holding a SolverSpec. The built-in ones are
+`pipeline.kinds.unit` and `pipeline.kinds.unit2d`, named in `KNOWN` as "module:ATTRIBUTE" and
+imported on first use; any other "module:ATTRIBUTE" naming a SolverSpec works the same way
+(tests use it), and `register(spec)` adds one under its name in this process (dask workers
+receive the spec itself, pickled, so they do not need the registry). The core modules know no
+kind by name.
 
-Point-solver calling convention (call="keywords", the default for new kinds):
+Point-solver calling convention (call="keywords", the default):
     record = solve(*coords, **model_options, time_limit=seconds)   # time_limit only if accepted
 where coords are the point's grid values in `dims` order and the record is a dict with
 "status" (int code), the float and flag variables, the array variables and "message". The
@@ -28,17 +32,20 @@ from __future__ import annotations
 import importlib
 import inspect
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-PENDING = -1
+from snapmorph.units import status as unit_status
 
-#: built-in kinds looked up lazily: name -> "module:ATTRIBUTE" of a SolverSpec (or a function
-#: returning one)
+PENDING = unit_status.PENDING
+
+#: built-in kinds, imported on first use: name -> "module:ATTRIBUTE" of a SolverSpec (or of a
+#: function returning one)
 KNOWN = {
-    "unit": "snapmorph.pipeline.solvers:unit_spec",
-    "unit2d": "snapmorph.units.unit2d:MAP_SPEC",
+    "unit": "snapmorph.pipeline.kinds.unit:SPEC",
+    "unit2d": "snapmorph.pipeline.kinds.unit2d:SPEC",
 }
 _REGISTRY: dict = {}
 
@@ -61,11 +68,11 @@ def resolve(ref):
 
 @dataclass(frozen=True)
 class MapGrid:
-    """A grid over any named axes with model options, for kinds other than the planar unit.
+    """The grid of a map: named axes and the model options of its points.
 
     axes: {dimension name: strictly increasing values (>= 2)}, in the map's dimension order;
     options: model options passed to the point solver as keywords (JSON-able values);
-    name: preset name or "custom".
+    name: preset name or "custom". Points are numbered in C order over the axes.
     """
 
     axes: dict
@@ -89,6 +96,7 @@ class MapGrid:
 
     @property
     def dims(self) -> tuple:
+        """The map's grid dimensions, in storage order."""
         return tuple(self.axes)
 
     @property
@@ -97,6 +105,7 @@ class MapGrid:
 
     @property
     def size(self) -> int:
+        """Number of points."""
         return int(np.prod(self.shape))
 
     def points(self) -> np.ndarray:
@@ -105,37 +114,60 @@ class MapGrid:
         return np.column_stack([m.ravel() for m in mesh])
 
     def to_dict(self) -> dict:
+        """JSON-ready description (exact floats survive a JSON round trip)."""
         return {"name": self.name, "axes": {k: list(v) for k, v in self.axes.items()},
                 "options": dict(self.options)}
 
+    @classmethod
+    def from_dict(cls, d: dict) -> "MapGrid":
+        return MapGrid(d["axes"], d.get("options", {}), d.get("name", "custom"))
+
     def with_options(self, **options) -> "MapGrid":
+        """The same axes with some model options replaced."""
         return MapGrid(self.axes, {**self.options, **options}, self.name)
+
+    def with_resolution(self, resolution) -> "MapGrid":
+        """The same grid at another solver resolution."""
+        return self.with_options(resolution=resolution)
 
 
 @dataclass(frozen=True)
 class SolverSpec:
     """A point solver and its schema section (see the module docstring).
 
-    name: kind name; solve: "module:function" of the point solver (importable on workers);
-    dims: grid dimensions in storage order; float_vars / flag_vars: name -> (units, long_name);
+    name: kind name; solve: the point solver (a module-level function, or "module:function";
+      importable on the workers); dims: grid dimensions in storage order;
+    float_vars / flag_vars: name -> (units, long_name);
     array_vars: name -> (extra dims, extra shape, units, long_name), a shape entry that is a
       string is read from the model options (e.g. "samples");
+    dim_attrs: dimension -> (units, long_name) of its coordinate (grid or extra dimension);
+    dim_labels: extra dimension -> its fixed coordinate values (default 0, 1, ...);
     status_codes: code -> name, must include 0 "ok" (-1 "pending" is implied);
     failure_statuses: names of the codes that mean "no result" (counted by --max-failed);
     required_when_ok: variables that must be finite at status ok (default: all floats, arrays);
-    options: model options and their defaults; presets: preset name -> grid or
-      "module:function" returning one; warm: "module:function"(options) run once per process
-      before the fan-out (compiles kernels); sources: modules / packages whose source
-      determines the results (hashed into the fingerprint; the solver's own module is added);
+    required_keys: keys a record must hold at a status that is not a failure (else it is
+      malformed: not_converged); default none (a missing value is then absent);
+    flag_defaults: flag -> its value at a point that has none (default -1, unknown);
+    options: model options and their defaults; presets: preset name -> grid, or a function
+      (or "module:function") returning one;
+    sources: modules / packages whose source determines the results (hashed into the
+      fingerprint with the modules they import; the solver's own module is added);
     schema_version, title, attrs: what the map file says about itself;
-    call: "keywords" or "positional" (the planar unit's historical call);
-    hooks (None = generic): finalise(rec, options) -> record, empty(options, status, message)
-      -> record, resolve_options(options) -> options, assemble(grid, total, attrs, spec) ->
-      xarray.Dataset, write(ds, path), validate_file(path) (raises when the map is unusable).
+    call: "keywords" or "positional" (the planar unit's historical call).
+    Hooks, functions (or "module:function"); None = none / the generic behaviour:
+      warm(options): run once per process before the fan-out (compiles kernels);
+      resolve_options(options) -> options: fills in defaults the solver decides;
+      domain(grid): raises ValueError when the grid is outside the kind's domain;
+      rules(record, raw) -> [names]: the kind's own rules on a checked record of a status
+        that is not a failure (may clear what does not exist at that status); returns the
+        names of values missing at status ok;
+      global_attrs(grid, options, provenance) -> dict: the file's global attributes;
+      finalise, empty, assemble, write, validate_file: replace the generic record check,
+        empty record, Dataset assembly, netCDF writer, or add a check of the written file.
     """
 
     name: str
-    solve: str
+    solve: Callable | str
     dims: tuple
     float_vars: dict
     flag_vars: dict = field(default_factory=dict)
@@ -145,19 +177,25 @@ class SolverSpec:
     required_when_ok: tuple | None = None
     options: dict = field(default_factory=dict)
     presets: dict = field(default_factory=dict)
-    warm: str | None = None
+    warm: Callable | str | None = None
     sources: tuple = ()
     schema_version: int = 1
     title: str = ""
     attrs: dict = field(default_factory=dict)
     dim_attrs: dict = field(default_factory=dict)
     call: str = "keywords"
-    finalise: str | None = None
-    empty: str | None = None
-    resolve_options: str | None = None
-    assemble: str | None = None
-    write: str | None = None
-    validate_file: str | None = None
+    finalise: Callable | str | None = None
+    empty: Callable | str | None = None
+    resolve_options: Callable | str | None = None
+    assemble: Callable | str | None = None
+    write: Callable | str | None = None
+    validate_file: Callable | str | None = None
+    required_keys: tuple = ()
+    flag_defaults: dict = field(default_factory=dict)
+    dim_labels: dict = field(default_factory=dict)
+    domain: Callable | str | None = None
+    rules: Callable | str | None = None
+    global_attrs: Callable | str | None = None
 
     def __post_init__(self):
         codes = {int(k): str(v) for k, v in self.status_codes.items()}
@@ -170,6 +208,11 @@ class SolverSpec:
         if self.call not in ("keywords", "positional"):
             raise ValueError(f"call must be 'keywords' or 'positional', got {self.call!r}")
         object.__setattr__(self, "dims", tuple(self.dims))
+
+    def hook(self, name: str):
+        """The hook `name` as a function (None if the kind has none)."""
+        ref = getattr(self, name)
+        return None if ref is None else resolve(ref)
 
     # -- status codes ---------------------------------------------------------------------
     def code(self, name: str, fallback: str = "not_converged") -> int:
@@ -221,21 +264,26 @@ class SolverSpec:
     def grid_options(self, grid) -> dict:
         """The model options of `grid` (defaults filled in), resolved (e.g. the default resolution)."""
         opts = {**self.options, **dict(getattr(grid, "options", {}))}
-        if self.resolve_options:
-            opts = resolve(self.resolve_options)(opts)
-        return opts
+        fill = self.hook("resolve_options")
+        return fill(opts) if fill else opts
 
     def check_grid(self, grid) -> None:
+        """ValueError unless `grid` has this kind's dimensions and lies in its domain."""
         dims = tuple(getattr(grid, "dims", ()))
         if dims != self.dims:
             raise ValueError(f"grid dimensions {dims} do not match kind {self.name!r} {self.dims}")
+        domain = self.hook("domain")
+        if domain:
+            domain(grid)
 
     # -- records -------------------------------------------------------------------------------
     def empty_record(self, options: dict, status: int, message: str = "") -> dict:
+        """A record of `status` in which every value is absent: NaN floats and arrays, flags at
+        their defaults."""
         if self.empty:
-            return resolve(self.empty)(options, status, message)
+            return self.hook("empty")(options, status, message)
         rec = {name: math.nan for name in self.float_vars}
-        rec.update({name: -1 for name in self.flag_vars})
+        rec.update({name: self.flag_defaults.get(name, -1) for name in self.flag_vars})
         for name in self.array_vars:
             rec[name] = np.full(self.array_shape(name, options), np.nan)
         rec["status"] = int(status)
@@ -243,10 +291,12 @@ class SolverSpec:
         return rec
 
     def finalise_record(self, rec, options: dict) -> dict:
-        """Check and clean a solver's record: known status; at "ok" every required variable
-        finite; at other statuses absent fields NaN. A malformed record becomes not_converged."""
+        """Check and clean a solver's record: a known status; at a failure status every value
+        absent; the values and shapes of the others checked (a missing one absent, unless it is
+        in `required_keys`), then the kind's `rules`; at "ok" every required variable finite.
+        A malformed record, or an "ok" one with a value missing, becomes not_converged."""
         if self.finalise:
-            return resolve(self.finalise)(rec, options)
+            return self.hook("finalise")(rec, options)
         bad = self.code("not_converged")
         if not isinstance(rec, dict):
             return self.empty_record(options, bad, f"solver returned {type(rec).__name__}, not dict")
@@ -258,27 +308,34 @@ class SolverSpec:
             if self.status_codes[status] in self.failure_statuses:
                 return out
             for name in self.float_vars:
-                v = rec.get(name, math.nan)
-                out[name] = math.nan if v is None else float(v)
+                v = self._get(rec, name, None)
+                out[name] = math.nan if v is None and name not in self.required_keys else float(v)
             for name in self.flag_vars:
-                v = int(rec.get(name, -1))
+                v = int(self._get(rec, name, out[name]))
                 if v not in (-1, 0, 1):
                     raise ValueError(f"flag {name} = {v} is not -1, 0 or 1")
                 out[name] = v
             for name in self.array_vars:
-                if name in rec and rec[name] is not None:
-                    arr = np.asarray(rec[name], dtype=float)
+                v = self._get(rec, name, None)
+                if v is not None or name in self.required_keys:
+                    arr = np.asarray(v, dtype=float)
                     want = self.array_shape(name, options)
                     if arr.shape != want:
                         raise ValueError(f"{name} has shape {arr.shape}, expected {want}")
                     out[name] = arr.copy()
         except Exception as exc:
             return self.empty_record(options, bad, f"malformed solver record: {exc!r}")
+        rules = self.hook("rules")
+        problems = rules(out, rec) if rules else []
         if status == 0:
-            missing = [n for n in self.required if not np.all(np.isfinite(out[n]))]
+            missing = [n for n in self.required if not np.all(np.isfinite(out[n]))] + list(problems)
             if missing:
                 return self.empty_record(options, bad, f"status ok but missing/invalid: {', '.join(missing)}")
         return out
+
+    def _get(self, rec: dict, name: str, default):
+        """rec[name], or `default` when the record leaves it out and the kind allows that."""
+        return rec[name] if name in self.required_keys else rec.get(name, default)
 
     def call_solver(self, fn, coords, options: dict, time_limit):
         """Call the point solver `fn` at `coords` per this kind's convention."""
@@ -295,6 +352,16 @@ def accepts_time_limit(fn) -> bool:
     except (TypeError, ValueError):
         return False
     return any(p.name == "time_limit" or p.kind is p.VAR_KEYWORD for p in params)
+
+
+def status_codes() -> dict:
+    """code -> name of every status of `units.status` but pending: the built-in kinds' codes."""
+    return {code: name for name, code in unit_status.CODE.items() if code != PENDING}
+
+
+def failure_statuses() -> tuple:
+    """The names of the failed computations of `units.status` (no value exists)."""
+    return tuple(unit_status.NAME[code] for code in unit_status.FAILED)
 
 
 def register(spec: SolverSpec) -> SolverSpec:
@@ -330,99 +397,3 @@ def get_spec(kind="unit") -> SolverSpec:
     if kind in KNOWN:
         _REGISTRY[kind] = spec
     return spec
-
-
-# ---------------------------------------------------------------------------------------------
-# The planar unit: the schema-1 design map of pipeline.schema / docs/design-map-schema.md.
-
-_UNIT_REQUIRED = ("F_cr", "d_cr", "d_unstable", "d_second", "S", "theta", "energy_barrier",
-                  "energy_stored")
-
-
-def unit_spec() -> SolverSpec:
-    """The planar arch-on-base unit over (h/L, t/L, w/L), written by `pipeline.dataset`."""
-    from snapmorph.pipeline import schema
-    from snapmorph.pipeline.grid import PRESETS
-
-    codes = {k: v for k, v in schema.STATUS_CODES.items() if k != PENDING}
-    return SolverSpec(
-        name="unit",
-        solve="snapmorph.pipeline.point:solve_point",
-        dims=tuple(schema.GRID_DIMS),
-        float_vars=dict(schema.FLOAT_VARS),
-        flag_vars=dict(schema.FLAG_VARS),
-        array_vars={name: (("sample", "xz"), ("samples", 2), *schema.SHAPE_ATTRS[name].values())
-                    for name in getattr(schema, "SHAPE_VARS", ("base_shape",))},
-        status_codes=codes,
-        # the schema-1 fields point.finalise_record guarantees at "ok"
-        required_when_ok=tuple(n for n in (*_UNIT_REQUIRED, "base_shape")
-                               if n in schema.FLOAT_VARS or n == "base_shape"),
-        failure_statuses=tuple(n for n in ("not_converged", "timeout", "invalid_geometry") if n in codes.values()),
-        options={"b_over_L": 0.0, "resolution": None, "samples": schema.DEFAULT_SAMPLES},
-        presets=dict(PRESETS),
-        warm="snapmorph.pipeline.solvers:_unit_warm",
-        # the rod solver, the planar unit model (units/ also holds the 2-D and 3-D units, which
-        # do not change this map), the normalisation, and the writer (it decides the bytes)
-        sources=("snapmorph.solver", "snapmorph.units.__init__", "snapmorph.units.geometry", "snapmorph.units.planar", "snapmorph.pipeline.point",
-                 "snapmorph.pipeline.schema", "snapmorph.pipeline.dataset"),
-        schema_version=int(schema.SCHEMA_VERSION),
-        title="snapmorph design map of the bistable arch-on-base unit",
-        call="positional",
-        finalise="snapmorph.pipeline.solvers:_unit_finalise",
-        empty="snapmorph.pipeline.solvers:_unit_empty",
-        resolve_options="snapmorph.pipeline.solvers:_unit_resolve_options",
-        assemble="snapmorph.pipeline.solvers:_unit_assemble",
-        write="snapmorph.pipeline.dataset:write_netcdf",
-        validate_file="snapmorph.pipeline.solvers:_unit_validate_file",
-    )
-
-
-def _unit_finalise(rec, options):
-    from snapmorph.pipeline.point import finalise_record
-
-    return finalise_record(rec, options["samples"])
-
-
-def _unit_empty(options, status, message=""):
-    from snapmorph.pipeline.point import empty_record
-
-    return empty_record(options["samples"], status, message)
-
-
-def _unit_resolve_options(options):
-    from snapmorph.pipeline.point import default_resolution
-
-    opts = dict(options)
-    if opts.get("resolution") is None:
-        opts["resolution"] = default_resolution()
-    else:
-        try:
-            from snapmorph.units.geometry import check_nodes
-        except ImportError:  # an older solver without the check: its own errors per point
-            return opts
-        try:
-            opts["resolution"] = check_nodes(opts["resolution"])
-        except ValueError as exc:
-            raise ValueError(f"resolution: {exc}") from None
-    return opts
-
-
-def _unit_warm(options):
-    from snapmorph.pipeline.point import warm_up
-
-    return warm_up(options.get("resolution"))
-
-
-def _unit_assemble(grid, total, attrs, spec):
-    from snapmorph.pipeline.dataset import assemble, global_attrs
-
-    prov = {k: attrs[k] for k in ("created", "package_version", "git_commit")}
-    prov["resolution"] = attrs["model_options"]["resolution"]
-    ds = assemble(grid, total, global_attrs(grid, prov))
-    return ds
-
-
-def _unit_validate_file(path):
-    from snapmorph.maps.designmap import DesignMap
-
-    DesignMap.load(path)

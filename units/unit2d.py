@@ -457,131 +457,20 @@ def simulate_unit_2d(g: UnitGeometry, nodes: int | None = None, nu: float = PETG
     return r
 
 
-# ---------------------------------------------------------------------------------------------
-# The 2-D unit as a point solver of the design-map pipeline (`pipeline.solvers`, kind "unit2d")
-
-#: status codes of a 2-D unit map point (5: state (iii) exists but is unstable, as the planar
-#: map's code 5)
-MAP_STATUS = {0: "ok", 1: "monostable", 2: "not_converged", 3: "invalid_geometry", 4: "timeout",
-              5: "second_state_unstable"}
+#: names that moved to the pipeline's kind "unit2d" -> their module there (one release)
+_MOVED_TO_PIPELINE = {"solve_map_point": "solve_map_point", "MAP_SPEC": "SPEC"}
+_PIPELINE_KIND = "snapmorph.pipeline.kinds.unit2d"
 
 
-def solve_map_point(h_over_L, t_over_L, w_over_L=0.05, b_over_L=0.0, resolution=DEFAULT_NODES_2D,
-                    time_limit=None) -> dict:
-    """One point of the 2-D unit's map, dimensionless (L = 0.1 m, E = PETG; the results are
-    scale free): F_cr L^2 / (E I) with I = w t^3 / 12, d / L, and in state (iii) the mean over
-    the sides of S / L, theta (deg) and curvature x L, and the largest difference of theta
-    between sides (deg; 0 for a symmetric second state); self_standing and the same means,
-    spread and per-side values in the released state (iii) (actuator and supports removed),
-    where it is self-standing. Never raises."""
-    L = 0.1
-    rec = {"status": 2, "message": ""}
-    try:
-        g = UnitGeometry(L=L, h=h_over_L * L, t=t_over_L * L, w=w_over_L * L, b=b_over_L * L)
-        check_geometry_2d(g)
-    except ValueError as exc:
-        return {"status": 3, "message": str(exc)}
-    try:
-        r = simulate_unit_2d(g, nodes=int(resolution))
-    except Exception as exc:  # noqa: BLE001 - a map point never raises
-        return {"status": 2, "message": f"{type(exc).__name__}: {exc}"}
-    EI = g.E * g.w * g.t**3 / 12.0
-    rec.update(F_cr=r.F_cr * L**2 / EI, d_cr=r.d_cr / L, d_unstable=r.d_unstable / L,
-               d_second=r.d_second / L, S=r.S / L, theta=r.theta_deg,
-               curvature=r.curvature * L, message=r.status if r.status != "ok" else "")
+def __getattr__(name):  # deprecated aliases of the design-map part, moved to the pipeline
+    if name in _MOVED_TO_PIPELINE:
+        import importlib
+        import warnings
 
-    def per_side(edges):
-        if not edges:
-            return math.nan, np.full(4, math.nan), np.full(4, math.nan)
-        th = np.array([edges[s]["theta_deg"] for s in SIDES])
-        return float(np.ptp(th)), th, np.array([edges[s]["curvature"] * L for s in SIDES])
-
-    rec["theta_spread"], rec["edge_theta"], rec["edge_curvature"] = per_side(r.edges.get("iii"))
-    rel = r.released.get("edges") if r.self_standing else None
-    rec.update(S_released=r.S_released / L, theta_released=r.theta_released_deg,
-               curvature_released=r.curvature_released * L)
-    (rec["theta_spread_released"], rec["edge_theta_released"],
-     rec["edge_curvature_released"]) = per_side(rel)
-    if r.status == "ok":
-        rec["status"] = 0
-    elif r.status == "monostable":
-        rec["status"] = 1
-    elif r.status.startswith("second state unstable"):
-        rec["status"] = 5
-    else:
-        rec["status"] = 2
-    rec["bistable"] = 1 if r.bistable else (0 if rec["status"] in (1, 5) else -1)
-    rec["self_standing"] = -1 if r.self_standing is None else int(bool(r.self_standing))
-    return rec
-
-
-def _map_presets():
-    from snapmorph.pipeline.solvers import MapGrid
-
-    return {
-        "small": MapGrid({"h_over_L": (0.25, 0.3, 0.35, 0.4, 0.45),
-                          "t_over_L": (0.004, 0.005, 0.0075)}, name="small"),
-        "ci": MapGrid({"h_over_L": (0.3, 0.4), "t_over_L": (0.005, 0.0075)},
-                      {"resolution": 21}, name="ci"),
-    }
-
-
-def _map_spec():
-    from snapmorph.pipeline.solvers import SolverSpec
-
-    return SolverSpec(
-        name="unit2d",
-        solve="snapmorph.units.unit2d:solve_map_point",
-        dims=("h_over_L", "t_over_L"),
-        float_vars={
-            "F_cr": ("1", "critical force before snap through, F_cr L^2 / (E w t^3 / 12)"),
-            "d_cr": ("1", "apex displacement at F_cr, d_cr / L"),
-            "d_unstable": ("1", "apex displacement of the unstable state (ii), d / L"),
-            "d_second": ("1", "apex displacement of the second stable state (iii), d / L"),
-            "S": ("1", "corner-to-corner chord of a side in state (iii), mean of the four, S / L"),
-            "theta": ("degree", "angle between the end tangents of a side in state (iii), mean"),
-            "curvature": ("1", "mean curvature of a side in state (iii) times L, mean of the four"),
-            "theta_spread": ("degree", "largest difference of theta between the sides in (iii)"),
-            "S_released": ("1", "chord of a side in the released state (iii) (actuator and "
-                                "supports removed), mean of the four, S / L"),
-            "theta_released": ("degree", "angle between the end tangents of a side in the "
-                                         "released state (iii), mean of the four"),
-            "curvature_released": ("1", "mean curvature of a side in the released state (iii) "
-                                        "times L, mean of the four"),
-            "theta_spread_released": ("degree", "largest difference of theta between the sides "
-                                                "in the released state (iii)"),
-        },
-        flag_vars={"bistable": ("1", "1 when the second stable state (iii) exists and is "
-                                     "stable, 0 when not (monostable or (iii) unstable)"),
-                   "self_standing": ("1", "1 when state (iii) stays stable, arches inverted, "
-                                          "with the actuator and supports removed; 0 when "
-                                          "not; -1 unknown or not bistable")},
-        array_vars={
-            "edge_theta": (("side",), (4,), "degree",
-                           "theta of each side (south, east, north, west) in state (iii)"),
-            "edge_curvature": (("side",), (4,), "1",
-                               "mean curvature of each side in state (iii) times L"),
-            "edge_theta_released": (("side",), (4,), "degree",
-                                    "theta of each side in the released state (iii)"),
-            "edge_curvature_released": (("side",), (4,), "1",
-                                        "mean curvature of each side in the released state "
-                                        "(iii) times L"),
-        },
-        status_codes=dict(MAP_STATUS),
-        failure_statuses=("not_converged", "timeout", "invalid_geometry"),
-        required_when_ok=("F_cr", "d_cr", "d_unstable", "d_second", "S", "theta", "curvature",
-                          "edge_theta", "edge_curvature"),
-        options={"w_over_L": 0.05, "b_over_L": 0.0, "resolution": DEFAULT_NODES_2D},
-        presets=_map_presets(),
-        sources=("snapmorph.solver", "snapmorph.units.unit2d", "snapmorph.units.frame3d", "snapmorph.units.push3d", "snapmorph.units.planar",
-                 "snapmorph.units.geometry"),
-        title="snapmorph map of the 2-D unit (square frame, two crossing arches)",
-    )
-
-
-def __getattr__(name):  # MAP_SPEC built on first use: pipeline is imported only then
-    if name == "MAP_SPEC":
-        spec = _map_spec()
-        globals()["MAP_SPEC"] = spec
-        return spec
-    raise AttributeError(name)
+        new = _MOVED_TO_PIPELINE[name]
+        warnings.warn(f"snapmorph.units.unit2d.{name} is deprecated (snapmorph 0.2): use "
+                      f"{_PIPELINE_KIND}.{new}", DeprecationWarning, stacklevel=2)
+        # looked up by name at run time, as `--kind module:ATTRIBUTE` is: an alias for old
+        # callers only, nothing in the project imports the pipeline from here
+        return getattr(importlib.import_module(_PIPELINE_KIND), new)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -16,7 +16,7 @@ import argparse
 import math
 
 GRIDS = ("default", "ci")
-DEFAULT_SOLVER = "snapmorph.pipeline.point:solve_point"
+DEFAULT_SOLVER = "snapmorph.pipeline.kinds.unit:solve_point"
 DEFAULT_KIND = "unit"
 DEFAULT_TIME_LIMIT = 60.0  # s per point; pipeline.build.DEFAULT_TIME_LIMIT (not imported: --help stays light)
 DEFAULT_CONNECT_TIMEOUT = 5.0
@@ -116,8 +116,8 @@ def _scheduler(text):
 
 def _cluster_args(p):
     p.add_argument("--kind", default=DEFAULT_KIND, metavar="NAME",
-                   help="point-solver kind from the registry in pipeline/solvers.py (default unit, "
-                        "the planar unit; e.g. unit2d), or MODULE:ATTRIBUTE of a SolverSpec")
+                   help="kind of map from the registry in pipeline/solvers.py (default unit, the "
+                        "planar unit; e.g. unit2d, the 2-D unit), or MODULE:ATTRIBUTE of a SolverSpec")
     p.add_argument("--scheduler", type=_scheduler, metavar="ADDRESS",
                    help="dask scheduler address or scheduler-file of an existing cluster "
                         "(default: $DASK_SCHEDULER_ADDRESS, else a local cluster)")
@@ -196,8 +196,7 @@ def _spec_and_grid(args):
     if args.resolution is not None:
         if "resolution" not in spec.options:
             raise ValueError(f"--resolution: kind {spec.name} has no resolution option")
-        grid = grid.with_resolution(args.resolution) if hasattr(grid, "with_resolution") \
-            else grid.with_options(resolution=args.resolution)
+        grid = grid.with_options(resolution=args.resolution)
         try:
             spec.grid_options(grid)  # the kind's own bounds (the unit: nodes in [11, 20001])
         except ValueError as exc:
@@ -256,18 +255,15 @@ def _run_check(args) -> int:
     import xarray as xr
 
     from snapmorph.pipeline.compare import Difference, compare_maps
+    from snapmorph.pipeline.dataset import check_file
     from snapmorph.commands._common import input_file
 
     spec, _ = _spec_and_grid(args)
     _solver(args, spec)
     against = input_file(args.against, "--against")
-    if spec.name == "unit":
-        from snapmorph.maps.designmap import DesignMap
-
-        expected = DesignMap.load(against).dataset  # validates the schema
-    else:
-        with xr.open_dataset(against, engine="netcdf4") as ds:
-            expected = ds.load()
+    check_file(spec, against)  # a finished map of the kind (the planar unit's: DesignMap.load)
+    with xr.open_dataset(against, engine="netcdf4") as ds:
+        expected = ds.load()
     with tempfile.TemporaryDirectory(prefix="snapmorph-check-") as tmp:
         out = Path(tmp) / f"{args.grid}.nc"
         report = _build(args, out, restart=True, force=True)
@@ -316,7 +312,6 @@ def _run_info(args) -> int:
     import numpy as np
 
     from snapmorph.maps.designmap import DesignMap
-    from snapmorph.pipeline.schema import STATUS_CODES
 
     if args.file:
         try:
@@ -339,7 +334,8 @@ def _run_info(args) -> int:
         print(f"  {name}: {lo:g} .. {hi:g} ({ds.sizes[name]} values)")
     print(f"  base-shape samples: {dm.samples}")
     status = ds["status"].values
-    counts = ", ".join(f"{STATUS_CODES[c]} {int(np.sum(status == c))}" for c in sorted(STATUS_CODES)
+    names = dm.status_names
+    counts = ", ".join(f"{names[c]} {int(np.sum(status == c))}" for c in sorted(names)
                        if np.any(status == c))
     print(f"  points: {status.size} ({counts})")
     ok = status == 0
@@ -360,7 +356,9 @@ def run(args) -> int:
     import warnings
 
     command = getattr(args, "maps_command", None)
-    # warnings (refused checkpoint files, a rebuild and why) as one line each, no source line
+    # warnings (refused checkpoint files, a rebuild and why) as one line each, no source line,
+    # while the command runs
+    plain = warnings.formatwarning
     warnings.formatwarning = lambda message, category, *rest, **kw: f"snapmorph maps: warning: {message}\n"
     try:
         return _dispatch(command, args)
@@ -368,6 +366,8 @@ def run(args) -> int:
         from snapmorph.cli import CommandError
 
         raise CommandError(str(exc)) from None
+    finally:
+        warnings.formatwarning = plain
 
 
 def _dispatch(command, args) -> int:

@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
-from snapmorph.pipeline.batch import empty_block
-from snapmorph.pipeline.dataset import assemble, global_attrs
-from snapmorph.pipeline.grid import Grid
+from snapmorph.pipeline.batch import new_block
+from snapmorph.pipeline.dataset import assemble
+from snapmorph.pipeline.kinds.unit import SPEC, Grid
 
 GRID = Grid(h_over_L=tuple(round(0.05 * k, 10) for k in range(1, 11)),  # 0.05 .. 0.5
             t_over_L=(0.0025, 0.005, 0.0075, 0.01), w_over_L=(0.02, 0.05, 0.08), samples=17)
@@ -55,7 +55,7 @@ def shape(h, t, w, samples=GRID.samples, released=False):
 
 def synthetic_dataset(grid=GRID):
     pts = grid.points()
-    total = empty_block(np.arange(grid.size), grid.samples)
+    total = new_block(SPEC, np.arange(grid.size), grid.options)
     for i, (h, t, w) in enumerate(pts):
         if np.allclose((h, t, w), FAILED):
             total["status"][i] = 2
@@ -82,4 +82,4 @@ def synthetic_dataset(grid=GRID):
         total["base_shape"][i] = shape(h, t, w, grid.samples)
     total["solve_time"][:] = 0.01
     prov = {"created": "2026-01-01T00:00:00+00:00", "package_version": "0.1.0", "git_commit": "test"}
-    return assemble(grid, total, global_attrs(grid, prov))
+    return assemble(SPEC, grid, total, grid.options, prov)

@@ -92,7 +92,7 @@ def test_wrong_dimensions(tmp_path):
 
 def test_schema_1_maps_load_with_a_warning_and_answer_only_the_actuated_state(tmp_path):
     from snapmorph.maps import MapDomainError, OldSchemaWarning
-    from snapmorph.pipeline.schema import OPTIONAL_VARS
+    from snapmorph.maps.schema import OPTIONAL_VARS
 
     ds = synthetic_dataset().drop_vars([*OPTIONAL_VARS, "base_shape_released"])
     ds.attrs["schema_version"] = np.int32(1)

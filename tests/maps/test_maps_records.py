@@ -1,14 +1,14 @@
 """Schema-2 point records: the released state, theta_end and the new status codes, from the
-real unit solver through `pipeline.point`."""
+real unit solver through `pipeline.kinds.unit`."""
 
 import math
 
 import numpy as np
 import pytest
 
-from snapmorph.pipeline.point import empty_record, finalise_record, model_options, solve_point
-from snapmorph.pipeline.schema import (FLOAT_VARS, OPTIONAL_VARS, RELEASED_VARS, SCHEMA_VERSION, SHAPE_VARS,
-                             STATUS_CODES)
+from snapmorph.maps.schema import FLOAT_VARS, OPTIONAL_VARS, RELEASED_VARS, SCHEMA_VERSION, SHAPE_VARS
+from snapmorph.pipeline.kinds.unit import empty_record, finalise_record, model_options, solve_point
+from snapmorph.units.status import NAME as STATUS_CODES
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ from snapmorph.cli import main
 
 def test_ci_snapshot_is_a_valid_map():
     assert CI_MAP.is_file(), f"{CI_MAP} is missing: run `make maps-ci` and commit it"
-    from snapmorph.pipeline.schema import SCHEMA_VERSION
+    from snapmorph.maps.schema import SCHEMA_VERSION
 
     dm = DesignMap.load(CI_MAP)
     assert dm.attrs["grid"] == "ci"

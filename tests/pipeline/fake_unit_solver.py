@@ -1,4 +1,4 @@
-"""A fast analytic stand-in for `pipeline.point.solve_point`, used to test the pipeline machinery.
+"""A fast analytic stand-in for `pipeline.kinds.unit.solve_point`, used to test the pipeline machinery.
 
 Behaviour (all dimensionless):
 - h/L < h_b(t) = 0.12 + 6 t/L: monostable (F_cr, d_cr present);

@@ -1,5 +1,6 @@
 """Helpers of the pipeline tests: the fake solver's expected output, subprocess environment."""
 
+import hashlib
 import os
 from pathlib import Path
 
@@ -22,6 +23,40 @@ def fake_kind():
     from snapmorph.pipeline.solvers import get_spec
 
     return dataclasses.replace(get_spec("unit"), sources=())
+
+
+def load(path):
+    """The map file `path`, read into memory."""
+    import xarray as xr
+
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        return ds.load()
+
+
+def sha(path):
+    """SHA-256 of a file's bytes."""
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def finished_indices(out):
+    """The grid indices held by the batch files of the checkpoint of `out`."""
+    from snapmorph.pipeline.checkpoint import checkpoint_dir
+
+    idx = set()
+    for p in checkpoint_dir(out).glob("batch-*.npz"):
+        with np.load(p) as z:
+            idx |= set(z["index"].tolist())
+    return idx
+
+
+def solve_batch(indices, coords, b_over_L, resolution, samples, solve):
+    """A checkpoint block of the planar unit's kind: `solve` at the points `coords` with flat
+    indices `indices`."""
+    from snapmorph.pipeline.batch import solve_points
+    from snapmorph.pipeline.solvers import get_spec
+
+    options = {"b_over_L": b_over_L, "resolution": resolution, "samples": samples}
+    return solve_points(indices, coords, get_spec("unit"), options, solve)
 
 
 def subprocess_env(**extra) -> dict:

@@ -6,24 +6,18 @@ import json
 import netCDF4
 import numpy as np
 import pytest
-import xarray as xr
 
 import snapmorph
-from pipeline_testing import FAKE, assert_matches_fake
+from pipeline_testing import FAKE, assert_matches_fake, finished_indices, load, solve_batch
 import fake_unit_solver as fake
-from snapmorph.pipeline.batch import solve_batch
 from snapmorph.pipeline.build import build_map, open_checkpoint
 from snapmorph.pipeline.checkpoint import CheckpointError, checkpoint_dir
 from snapmorph.pipeline.compare import compare_maps
-from snapmorph.pipeline.grid import preset
-from snapmorph.pipeline.schema import FLAG_VARS, FLOAT_VARS, REQUIRED_ATTRS, SCHEMA_VERSION, STATUS_CODES
+from snapmorph.maps.schema import FLAG_VARS, FLOAT_VARS, REQUIRED_ATTRS, SCHEMA_VERSION
+from snapmorph.pipeline import preset
+from snapmorph.units.status import NAME as STATUS_CODES
 
 CI = preset("ci")
-
-
-def load(path):
-    with xr.open_dataset(path, engine="netcdf4") as ds:
-        return ds.load()
 
 
 @pytest.fixture(scope="module")
@@ -81,14 +75,6 @@ def test_result_does_not_depend_on_workers_or_batches(reference, tmp_path):
     assert compare_maps(load(out), load(other), rtol=0, atol=0) == []
 
 
-def _finished_indices(out):
-    idx = set()
-    for p in checkpoint_dir(out).glob("batch-*.npz"):
-        with np.load(p) as z:
-            idx |= set(z["index"].tolist())
-    return idx
-
-
 def test_resume_recomputes_only_missing_points(reference, tmp_path, monkeypatch):
     ref, _ = reference
     out = tmp_path / "ci.nc"
@@ -99,7 +85,7 @@ def test_resume_recomputes_only_missing_points(reference, tmp_path, monkeypatch)
     for idx in (np.arange(0, 7), np.arange(12, 20)):
         ckpt.write(solve_batch(idx, coords[idx], CI.b_over_L, CI.resolution, CI.samples, fake.solve))
     ckpt.close()
-    finished = _finished_indices(out)
+    finished = finished_indices(out)
     assert len(finished) == 15
     (ckpt.dir / ".batch-0000099-deadbeef.npz.0a1b2c3d.tmp").write_bytes(b"half a file")
     (ckpt.dir / "batch-0000020-damaged0.npz").write_bytes(b"PK\x03\x04 truncated")
@@ -169,6 +155,8 @@ def test_bad_arguments(tmp_path, kwargs, match):
 @pytest.mark.slow
 def test_a_point_that_kills_its_worker_is_recorded(tmp_path, monkeypatch):
     import dask
+    import distributed  # noqa: F401 - its config defaults first: leaving the dask.config.set
+    # below would otherwise drop the whole "distributed" section it created
 
     monkeypatch.setenv("FAKE_SOLVER_CRASH", "0.2 0.0075 0.04")  # os._exit on that point
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):

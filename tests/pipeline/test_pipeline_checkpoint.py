@@ -3,20 +3,17 @@ file is refused (with a warning) and its points recomputed, and the final map eq
 uninterrupted build byte for byte."""
 
 import dataclasses
-import hashlib
 import shutil
 
 import numpy as np
 import pytest
-import xarray as xr
 
 import fake_unit_solver as fake
-from pipeline_testing import FAKE, assert_matches_fake, fake_kind
-from snapmorph.pipeline.batch import solve_batch
+from pipeline_testing import FAKE, assert_matches_fake, fake_kind, load, sha, solve_batch
 from snapmorph.pipeline.build import build_map, open_checkpoint
 from snapmorph.pipeline.checkpoint import checkpoint_dir
 from snapmorph.pipeline.fingerprint import block_checksum
-from snapmorph.pipeline.grid import preset
+from snapmorph.pipeline import preset
 from snapmorph.pipeline.solvers import get_spec
 
 CI = preset("ci")
@@ -24,15 +21,6 @@ COORDS = CI.points()
 KEYS = get_spec("unit").block_keys()
 KIND = fake_kind()
 BATCHES = (np.arange(0, 6), np.arange(6, 12), np.arange(12, 18))  # 18 of 24 points checkpointed
-
-
-def sha(path):
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def load(path):
-    with xr.open_dataset(path, engine="netcdf4") as ds:
-        return ds.load()
 
 
 @pytest.fixture(scope="module")

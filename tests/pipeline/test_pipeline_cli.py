@@ -8,7 +8,7 @@ import xarray as xr
 
 from pipeline_testing import FAKE, REPO
 from snapmorph.pipeline.dataset import write_netcdf
-from snapmorph.pipeline.schema import SCHEMA_VERSION
+from snapmorph.maps.schema import SCHEMA_VERSION
 from snapmorph.cli import main
 
 

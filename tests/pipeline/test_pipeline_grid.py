@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from snapmorph.pipeline.grid import Grid, preset
+from snapmorph.pipeline import Grid, preset
 
 
 def test_default_preset_covers_the_required_ranges():

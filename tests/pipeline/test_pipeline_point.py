@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from snapmorph.pipeline.point import E_REF, L_REF, finalise_record, resample_shape, solve_point
+from snapmorph.pipeline.kinds.unit import E_REF, L_REF, finalise_record, resample_shape, solve_point
 
 
 @dataclass(frozen=True)

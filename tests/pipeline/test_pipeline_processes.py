@@ -7,22 +7,16 @@ import subprocess
 import sys
 import time
 
-import numpy as np
 import pytest
-import xarray as xr
 
-from pipeline_testing import FAKE, REPO, assert_matches_fake, fake_kind, subprocess_env
+from pipeline_testing import (FAKE, REPO, assert_matches_fake, fake_kind, finished_indices, load,
+                              subprocess_env)
 from snapmorph.pipeline.build import build_map
 from snapmorph.pipeline.checkpoint import checkpoint_dir
 from snapmorph.pipeline.compare import compare_maps
-from snapmorph.pipeline.grid import preset
+from snapmorph.pipeline import preset
 
 CI = preset("ci")
-
-
-def load(path):
-    with xr.open_dataset(path, engine="netcdf4") as ds:
-        return ds.load()
 
 
 def wait_for(predicate, timeout, what):
@@ -59,14 +53,6 @@ def cli_build(out, *extra):
     return [sys.executable, "-m", "snapmorph", "maps", "build", "--grid", "ci", "--out", str(out),
             "--solver", FAKE, "--no-progress", "--max-failed", "2",
             "--kind", "pipeline_testing:fake_kind", *extra]
-
-
-def finished_indices(out):
-    idx = set()
-    for p in checkpoint_dir(out).glob("batch-*.npz"):
-        with np.load(p) as z:
-            idx |= set(z["index"].tolist())
-    return idx
 
 
 def logged_points(log):

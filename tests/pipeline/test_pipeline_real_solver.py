@@ -9,8 +9,7 @@ import xarray as xr
 unit = pytest.importorskip("snapmorph.units.planar")
 
 from snapmorph.pipeline.build import build_map  # noqa: E402
-from snapmorph.pipeline.grid import preset  # noqa: E402
-from snapmorph.pipeline.point import solve_point  # noqa: E402
+from snapmorph.pipeline import preset, solve_point  # noqa: E402
 
 CI = preset("ci")
 

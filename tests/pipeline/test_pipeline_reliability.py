@@ -1,34 +1,23 @@
 """Time limits, the watchdog, idempotent builds, exit codes and option checks of `maps build`."""
 
-import hashlib
 import subprocess
 import sys
 import time
 
 import numpy as np
 import pytest
-import xarray as xr
 
 import fake_unit_solver as fake
-from pipeline_testing import FAKE, REPO, assert_matches_fake, fake_kind, subprocess_env
+from pipeline_testing import FAKE, REPO, assert_matches_fake, fake_kind, load, sha, subprocess_env
 from snapmorph.pipeline.build import allowed_failures, build_map, parse_max_failed
 from snapmorph.pipeline.checkpoint import checkpoint_dir
-from snapmorph.pipeline.grid import preset
-from snapmorph.pipeline.schema import TIMEOUT
+from snapmorph.pipeline import preset
 from snapmorph.pipeline.solvers import get_spec
+from snapmorph.units.status import TIMEOUT
 from snapmorph.cli import main
 
 CI = preset("ci")
 SLOW = (0.2, 0.005, 0.06)  # a bistable point of the CI grid
-
-
-def sha(path):
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def load(path):
-    with xr.open_dataset(path, engine="netcdf4") as ds:
-        return ds.load()
 
 
 def without(ds, point):
@@ -83,20 +72,41 @@ def test_watchdog_stops_a_solver_that_ignores_its_time_limit(tmp_path, monkeypat
 FAKE_KIND = fake_kind()
 
 
-def test_unit_kind_hashes_the_model_source():
-    from snapmorph.pipeline.fingerprint import solver_modules, source_files
-
-    names = {rel for rel, _ in source_files(solver_modules(get_spec("unit"), fake.solve))}
-    assert {"solver/continuation.py", "units/__init__.py", "units/geometry.py",
-            "units/planar.py", "pipeline/point.py", "pipeline/schema.py", "pipeline/dataset.py",
-            "fake_unit_solver.py"} <= names
-    # every module of units/ the planar unit imports is hashed (a new import must be added)
+def _assert_imports_hashed(names, modules):
+    """Every module of units/ that the files `modules` import is among the hashed `names` (a
+    new import is hashed without an edit: the fingerprint follows imports)."""
     import ast
-    for module in ("units/planar.py", "units/geometry.py"):
+    for module in modules:
         tree = ast.parse((REPO / module).read_text())
         for node in ast.walk(tree):
             if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("snapmorph.units."):
                 assert node.module.removeprefix("snapmorph.").replace(".", "/") + ".py" in names, (module, node.module)
+
+
+def test_unit_kind_hashes_the_model_source():
+    from snapmorph.pipeline.fingerprint import solver_modules, source_files
+
+    names = {rel for rel, _ in source_files(solver_modules(get_spec("unit"), fake.solve))}
+    # (solver/unit.py and solver/unit_model.py are units/planar.py and units/geometry.py now,
+    # pipeline/point.py is pipeline/kinds/unit.py, pipeline/schema.py is maps/schema.py)
+    assert {"solver/continuation.py", "units/__init__.py", "units/geometry.py",
+            "units/planar.py", "pipeline/kinds/unit.py", "maps/schema.py", "pipeline/dataset.py",
+            "fake_unit_solver.py"} <= names
+    # every module of units/ the planar unit imports is hashed
+    _assert_imports_hashed(names, ("units/planar.py", "units/geometry.py", "pipeline/kinds/unit.py"))
+
+
+def test_unit2d_kind_hashes_the_model_source():
+    from snapmorph.pipeline.fingerprint import solver_modules, source_files
+
+    spec = get_spec("unit2d")
+    names = {rel for rel, _ in source_files(solver_modules(spec, spec.solve))}
+    assert {"units/__init__.py", "units/unit2d.py", "units/frame3d.py", "units/push3d.py",
+            "units/planar.py", "units/status.py", "pipeline/kinds/unit2d.py", "pipeline/solvers.py",
+            "pipeline/dataset.py"} <= names
+    assert "pipeline/kinds/unit.py" not in names  # the planar kind does not change this map
+    _assert_imports_hashed(names, ("units/unit2d.py", "units/frame3d.py", "units/push3d.py",
+                                   "pipeline/kinds/unit2d.py"))
 
 
 def test_up_to_date_map_is_left_alone_and_force_rebuilds_the_same_bytes(tmp_path, monkeypatch):

@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 import pytest
-import xarray as xr
 
 import fake_unit2d
+from pipeline_testing import load
 from snapmorph.pipeline.batch import solve_points
 from snapmorph.pipeline.build import build_map, open_checkpoint
 from snapmorph.pipeline.checkpoint import checkpoint_dir
@@ -15,11 +15,6 @@ from snapmorph.cli import main
 
 KIND = "fake_unit2d:SPEC"
 GRID = fake_unit2d.SPEC.preset("small")
-
-
-def load(path):
-    with xr.open_dataset(path, engine="netcdf4") as ds:
-        return ds.load()
 
 
 def check_map(ds):

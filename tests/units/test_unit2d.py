@@ -263,7 +263,8 @@ def test_an_unstable_second_state_is_reported_as_such(monkeypatch):
     _solver()
     from snapmorph.solver.stability import StateStability
     from snapmorph.units import push3d
-    from snapmorph.units.unit2d import simulate_unit_2d, solve_map_point
+    from snapmorph.pipeline.kinds.unit2d import solve_map_point
+    from snapmorph.units.unit2d import simulate_unit_2d
 
     real = push3d._state_stability
 
@@ -293,7 +294,7 @@ def test_simulate_bad_input_names_the_parameter(kwargs, name):
 
 
 def test_map_point_is_dimensionless_and_never_raises(tall21):
-    from snapmorph.units.unit2d import solve_map_point
+    from snapmorph.pipeline.kinds.unit2d import solve_map_point
 
     rec = solve_map_point(0.4, 0.005, resolution=21)
     EI = G40.E * G40.w * G40.t**3 / 12
@@ -307,7 +308,7 @@ def test_map_point_is_dimensionless_and_never_raises(tall21):
     assert rec["edge_theta_released"] == pytest.approx(
         [tall21.released["edges"][s]["theta_deg"] for s in SIDES])
     assert rec["theta_spread_released"] > 10.0
-    from snapmorph.units.unit2d import MAP_SPEC
+    from snapmorph.pipeline.kinds.unit2d import SPEC as MAP_SPEC
 
     clean = MAP_SPEC.finalise_record(rec, MAP_SPEC.options)
     assert clean["status"] == 0 and clean["self_standing"] == 1
