@@ -107,7 +107,7 @@ def unit2d(nodes=(21, 41, 81), h=40.0, t=0.5, L=100.0, w=5.0):
 
 
 def map2d(nodes=41, h_over_L=(0.2, 0.25, 0.3, 0.35, 0.4), t_over_L=(0.004, 0.005, 0.0075)):
-    from snapmorph.units.unit2d import solve_map_point
+    from snapmorph.pipeline.kinds.unit2d import solve_map_point
 
     for hl in h_over_L:
         for tl in t_over_L:

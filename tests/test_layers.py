@@ -93,7 +93,6 @@ def import_graph():
     return mods, {m: imports_of(m, p, known) for m, p in mods.items()}
 
 
-@KNOWN_BEFORE_THE_REDESIGN
 def test_every_import_follows_the_flow():
     mods, graph = import_graph()
     wrong = []

@@ -455,22 +455,3 @@ def simulate_unit_2d(g: UnitGeometry, nodes: int | None = None, nu: float = PETG
     r.solve_time = time.perf_counter() - t0
     r.n_nodes = model.mesh.n_nodes
     return r
-
-
-#: names that moved to the pipeline's kind "unit2d" -> their module there (one release)
-_MOVED_TO_PIPELINE = {"solve_map_point": "solve_map_point", "MAP_SPEC": "SPEC"}
-_PIPELINE_KIND = "snapmorph.pipeline.kinds.unit2d"
-
-
-def __getattr__(name):  # deprecated aliases of the design-map part, moved to the pipeline
-    if name in _MOVED_TO_PIPELINE:
-        import importlib
-        import warnings
-
-        new = _MOVED_TO_PIPELINE[name]
-        warnings.warn(f"snapmorph.units.unit2d.{name} is deprecated (snapmorph 0.2): use "
-                      f"{_PIPELINE_KIND}.{new}", DeprecationWarning, stacklevel=2)
-        # looked up by name at run time, as `--kind module:ATTRIBUTE` is: an alias for old
-        # callers only, nothing in the project imports the pipeline from here
-        return getattr(importlib.import_module(_PIPELINE_KIND), new)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
