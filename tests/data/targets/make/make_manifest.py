@@ -5,13 +5,13 @@ import json
 import sys
 from pathlib import Path
 
-PARTS = ["svg", "freecad", "librecad_draw", "librecad_resave", "synthetic", "csv"]
+PARTS = ["svg", "freecad", "librecad_draw", "librecad_resave", "synthetic", "csv", "libreoffice"]
 READ_KEYS = ["length_mm", "start_mm", "end_mm", "turn_deg", "start_heading_deg", "frame", "direction",
              "tol_mm", "turn_tol_deg"]
 REASONS = {"closed", "several-candidates", "no-curve", "non-planar", "probably-metres", "too-short",
-           "unit-unknown"}
+           "unit-unknown", "unsupported-format"}
 ORDER = ["file", "program", "what", "expect", "select", "reason", "reason_alt", "length_mm", "start_mm", "end_mm",
-         "turn_deg", "start_heading_deg", "frame", "page_mm", "direction", "tol_mm", "turn_tol_deg", "insunits",
+         "turn_deg", "start_heading_deg", "frame", "page_mm", "bbox_mm", "svg_ids", "direction", "tol_mm", "turn_tol_deg", "insunits",
          "units_note", "length_if_px_mm", "tangents", "tangent_start_deg", "tangent_end_deg", "candidates", "note"]
 
 
@@ -30,7 +30,7 @@ def main(outdir, build):
         else:
             assert e["reason"] in REASONS, e
             for k in ("start_mm", "end_mm", "turn_deg", "start_heading_deg", "direction", "frame",
-                      "tol_mm", "turn_tol_deg", "page_mm"):
+                      "tol_mm", "turn_tol_deg", "page_mm", "bbox_mm", "svg_ids"):
                 e.pop(k, None)
         assert (outdir / e["file"]).is_file(), e["file"]
         if "insunits" in e and e["insunits"] is None and not e["file"].endswith(".dxf"):
