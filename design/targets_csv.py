@@ -110,11 +110,14 @@ def _length(mm) -> float:
 
 
 def _split(line: str) -> list:
-    """Cells of one line: ',' separated, else ';' (decimal commas allowed), tab or spaces."""
+    """Cells of one line (quotes allowed): ';' separated with decimal commas (as a German
+    locale writes), else ',' separated, else tabs or spaces."""
+    import csv
+
     if ";" in line:
-        return [c.strip().replace(",", ".") for c in line.split(";")]
+        return [c.strip().replace(",", ".") for c in next(csv.reader([line], delimiter=";"))]
     if "," in line:
-        return [c.strip() for c in line.split(",")]
+        return [c.strip() for c in next(csv.reader([line]))]
     return line.split()
 
 
