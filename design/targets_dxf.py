@@ -23,7 +23,7 @@ from snapmorph.design.targets_pieces import Piece, TargetError
 #: the curve entities read
 CURVES = ("LINE", "ARC", "CIRCLE", "ELLIPSE", "LWPOLYLINE", "POLYLINE", "SPLINE", "HELIX")
 #: flattening: largest distance (mm) between a curve and the polyline that samples it
-SAGITTA_MM = 1e-3
+SAGITTA_MM = 1e-4
 #: mm per drawing unit, by $INSUNITS code (0, unitless, is taken as mm)
 MM_PER_INSUNIT = {0: 1.0, 1: 25.4, 2: 304.8, 3: 1609344.0, 4: 1.0, 5: 10.0, 6: 1000.0,
                   7: 1e6, 8: 25.4e-6, 9: 0.0254, 10: 914.4, 11: 1e-7, 12: 1e-6, 13: 1e-3,

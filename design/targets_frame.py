@@ -9,8 +9,9 @@ simulated shapes can be written back where they overlay the user's drawing:
   user units), and as a DXF in mm with y up from the page's bottom edge, as Inkscape's own DXF
   export places it.
 - DXF: target = WCS x, y times the drawing unit in mm. Written back as a DXF of the same
-  `$INSUNITS` (coordinates in drawing units) and an SVG in mm.
-- CSV: target = the columns in mm. Written back in mm.
+  `$INSUNITS` (coordinates in drawing units), and as an SVG in mm whose page is the curves'
+  bounding box plus 5 mm (a view: positions in it are relative to that page).
+- CSV: target = the columns in mm. Written back as a DXF in mm and the SVG view.
 """
 
 from __future__ import annotations
@@ -106,7 +107,7 @@ def _overlay_svg(frame, curves, path, colours) -> Path:
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" {attrs}>']
     for name, p in pts.items():
         r, g, b_ = aci2rgb(int(colours.get(name, 7))) if colours.get(name, 7) != 7 else (0, 0, 0)
-        d = " ".join(f"{x:.5f},{y:.5f}" for x, y in p)
+        d = " ".join(f"{x:.10g},{y:.10g}" for x, y in p)
         out.append(f'<g id="{name}"><polyline points="{d}" fill="none" '
                    f'stroke="rgb({r},{g},{b_})" stroke-width="{stroke:.4g}"/></g>')
     out.append("</svg>")

@@ -11,6 +11,7 @@ shapes (rect, circle, ellipse, polygon, a path ending in Z) are pieces marked cl
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +38,7 @@ def _mm_per_px() -> float:
 
 def read_svg(path, where: str | None = None):
     """(pieces, frame, notes) of an SVG file: every drawn shape's subpaths, in mm."""
+    import io
     import xml.etree.ElementTree as ET
 
     import svgelements as se
@@ -44,13 +46,13 @@ def read_svg(path, where: str | None = None):
     path = Path(path)
     where = where or str(path)
     try:
-        tree = ET.parse(path)
-        svg = se.SVG.parse(_known_units(path.read_bytes()), ppi=96)
+        root = ET.parse(path).getroot()
+        context = _mark(root)
+        svg = se.SVG.parse(io.BytesIO(ET.tostring(root)), ppi=96)
     except (ET.ParseError, ValueError, TypeError, AttributeError, IndexError) as exc:
         raise TargetError(f"{where}: not a readable SVG file ({exc})", "unreadable") from None
     mmpx = _mm_per_px()
     frame = _frame(svg, where)
-    context = _ancestry(tree.getroot())
     pieces, notes, last_use = [], [], None
     for el in svg.elements():
         if isinstance(el, se.Use):
@@ -58,17 +60,23 @@ def read_svg(path, where: str | None = None):
             continue
         if not isinstance(el, se.Shape) or el.values.get("visibility") in ("hidden", "collapse"):
             continue
+        info = context.get(el.values.get(_INDEX), {})
         via_use = last_use if _from_use(el) else None
+        if info.get("hidden") and via_use is None:
+            continue  # inside <defs>, <symbol>, <marker>, <clipPath>, ...: drawn only if used
         shape = se.Path(el)
         if not len(shape):
             continue
         kind = type(el).__name__
         own = {el.id} if el.id else set()
-        groups = set(context.get(el.id, ()))
+        groups = set(info.get("above", ()))
+        name = el.id
         if via_use is not None:
+            use = context.get(via_use.values.get(_INDEX), {})
             own.add(via_use.id)
-            groups |= set(context.get(via_use.id, ()))
-        label = f"{kind.lower()}#{via_use.id if via_use is not None and via_use.id else el.id}"
+            groups |= set(use.get("above", ()))
+            name = via_use.id or name
+        label = f"{kind.lower()}#{name}" if name else f"{kind.lower()} {len(pieces) + 1} (no id)"
         subpaths = list(shape.as_subpaths())
         for k, sub in enumerate(subpaths):
             xy, closed = sample_subpath(se.Path(sub))
@@ -76,52 +84,48 @@ def read_svg(path, where: str | None = None):
                 continue
             mm = np.column_stack([xy[:, 0] * mmpx, -xy[:, 1] * mmpx, np.zeros(len(xy))])
             pieces.append(Piece(mm, label + (f" subpath {k + 1}" if len(subpaths) > 1 else ""),
-                                closed=closed or kind in _CLOSED_SHAPES, names=frozenset(own),
-                                groups=frozenset(groups), order=len(pieces)))
+                                closed=closed or kind in _CLOSED_SHAPES,
+                                names=frozenset(own - {None}), groups=frozenset(groups),
+                                order=len(pieces)))
     return pieces, frame, notes
 
 
-def _known_units(data: bytes):
-    """The file as a stream for svgelements, the root's width and height in metres (as Inkscape
-    writes them for a document in m) or in Q (quarter mm) rewritten in mm, which it knows."""
-    import io
-    import re
+#: the attribute that numbers every element, so that a shape svgelements yields is found in
+#: the XML tree (svgelements keeps no parent links)
+_INDEX = "data-snapmorph-index"
+#: containers whose content is drawn only through a <use>, or not at all
+_NOT_DRAWN = {"defs", "symbol", "marker", "clipPath", "mask", "pattern", "metadata",
+              "namedview", "title", "desc"}
 
-    head = re.search(rb"<svg\b[^>]*>", data)
-    if head is None:
-        return io.BytesIO(data)
 
-    def mm(match):
-        factor = 1000.0 if match.group(3) == b"m" else 0.25
-        return match.group(1) + b"%.10gmm" % (float(match.group(2)) * factor) + match.group(4)
+def _mark(root) -> dict:
+    """Number every element (attribute _INDEX); {index: {"above": the ids and Inkscape labels
+    of its ancestor groups, "hidden": inside a container that is not drawn}}. A root width or
+    height in m or Q (Inkscape writes m for a metre document), which svgelements does not
+    know, is rewritten in mm."""
+    for key in ("width", "height"):
+        m = re.fullmatch(r"\s*([-+.\deE]+)\s*(m|Q)\s*", root.get(key) or "")
+        if m:
+            root.set(key, f"{float(m.group(1)) * (1000.0 if m.group(2) == 'm' else 0.25):.10g}mm")
+    out = {}
 
-    tag = re.sub(rb'(\s(?:width|height)\s*=\s*["\'])\s*([-+.\deE]+)\s*(m|Q)\s*(["\'])', mm,
-                 head.group(0))
-    return io.BytesIO(data[:head.start()] + tag + data[head.end():])
+    def walk(node, above, hidden):
+        tag = node.tag.split("}")[-1] if isinstance(node.tag, str) else ""
+        index = str(len(out))
+        node.set(_INDEX, index)
+        out[index] = {"above": tuple(above), "hidden": hidden}
+        if tag in ("g", "svg", "a", "switch", "symbol"):
+            above = above + [v for v in (node.get("id"), _label(node)) if v]
+        for child in node:
+            walk(child, above, hidden or tag in _NOT_DRAWN)
+
+    walk(root, [], False)
+    return out
 
 
 def _from_use(el) -> bool:
     """True for a shape svgelements produced from a <use> (it inherits the use's href)."""
-    return any(k.endswith("href") for k in el.values) and "href" not in str(el.values.get("tag"))
-
-
-def _ancestry(root) -> dict:
-    """{element id: the ids and Inkscape labels of its ancestor groups}, from the XML tree
-    (svgelements keeps no parent links)."""
-    out = {}
-
-    def walk(node, above):
-        here = above
-        if node.tag.split("}")[-1] in ("g", "svg", "a", "switch"):
-            here = above + [v for v in (node.get("id"), _label(node)) if v]
-        for child in node:
-            cid = child.get("id")
-            if cid:
-                out[cid] = tuple(here) + ((_label(child),) if _label(child) else ())
-            walk(child, here)
-
-    walk(root, [])
-    return out
+    return any(k.endswith("href") for k in el.values)
 
 
 def _label(node):
