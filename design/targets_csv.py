@@ -97,7 +97,7 @@ def read_csv(path, units: str | None = None, where: str | None = None):
                               "read only as a tangent (tangent_deg, angle_deg) or as a constant "
                               "z (z_mm); rename or remove it", "unreadable")
     mm = data[:, :2] * MM_PER[unit]
-    if len(mm) > 2 and np.hypot(*(mm[-1] - mm[0])) <= JOIN_TOL_MM:
+    if len(mm) > 2 and np.hypot(*(mm[-1] - mm[0])) <= JOIN_TOL_MM < _length(mm):  # not a dot
         raise TargetError(f"{where}: the curve is closed (the last point is the first, "
                           f"{_length(mm):.2f} mm round); a closed curve is never a target: "
                           "remove the last point or leave the ends apart", "closed")
