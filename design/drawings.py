@@ -6,7 +6,11 @@ Three sheets, each written as DXF (R2000, $INSUNITS = mm) and SVG:
   outer width 4w, two rails of width w around a 2w-wide hole, solid over its end regions of
   length b + w; spacers are solid. Unit boundaries engraved across the strip, units numbered
   with the side their arch goes on ("3+": on the engraved face, "3-": on the other face). The
-  strip is cut at unit boundaries into pieces no longer than the bed; joints engraved "J1"...
+  strip is cut at unit boundaries into pieces no longer than the bed (at a boundary where both
+  neighbours leave one face free, when there is one); joints engraved "J1"..., each joined by
+  an overlap tab "T1"... (a separate part, 4w wide, over both neighbours' solid end regions)
+  glued across it on the free face, not by a butt joint alone.
+- ``tabs``: one overlap tab per joint of the base pieces (when the strip is split).
 - ``arches``: one flat blank per arched unit, width w, developed length 2(b + w) plus the arc
   length of the sinusoid z = (h/2)(1 - cos(2π(x - x0)/la)), the flat-end limits engraved.
 - ``molds``: one closed profile per arched unit to extrude (by at least w) and 3D print: the
@@ -14,7 +18,10 @@ Three sheets, each written as DXF (R2000, $INSUNITS = mm) and SVG:
   when it lies on the mold, over a base block.
 
 Layers: CUT (through cuts), ENGRAVE (on the part), MARKS (notes beside the parts, not
-fabricated); their colours (AutoCAD colour indices) are configurable.
+fabricated); their colours (AutoCAD colour indices) are configurable. Before a sheet is
+written it is checked (`drawing_checks.check_paths`: closed cuts, no duplicate lines); with a
+bed (`write_drawings(..., bed=(600, 400))`) the laser-cut parts are nested on sheets of that
+size (`nesting`), with `kerf_mm` the cuts are offset by half the kerf (`kerf`).
 """
 
 from __future__ import annotations
@@ -36,13 +43,15 @@ SIDE_NOTE = ("unit n+: arch on the engraved face of the base, n-: on the other f
 
 @dataclass
 class Entity:
-    """A polyline (points (k, 2) mm, closed or open) or a text (at points[0], height mm)."""
+    """A polyline (points (k, 2) mm, closed or open) or a text (at points[0], height mm,
+    turned `angle` degrees counter-clockwise)."""
 
     layer: str
     points: np.ndarray
     closed: bool = False
     text: str = ""
     height: float = 0.0
+    angle: float = 0.0
 
     @property
     def left_aligned(self) -> bool:
@@ -101,23 +110,53 @@ def _label(u: Unit, i: int) -> str:
 
 # --- sheets --------------------------------------------------------------------------------------
 def split_pieces(units, bed_length_mm: float | None):
-    """Unit index ranges [(first, last + 1)] of base pieces no longer than the bed (mm)."""
+    """Unit index ranges [(first, last + 1)] of base pieces no longer than the bed (mm).
+
+    Each piece is as long as the bed allows, cut at the last unit boundary where both
+    neighbours leave a face free for the overlap tab (`tab_face`), or at the last boundary
+    when no such one fits."""
     lengths = [u.L * 1e3 for u in units]
     if bed_length_mm is None or sum(lengths) <= bed_length_mm:
         return [(0, len(units))]
     if bed_length_mm <= 0:
         raise ValueError(f"bed length must be > 0 mm, got {bed_length_mm}")
-    pieces, start, run = [], 0, 0.0
     for i, L in enumerate(lengths):
         if L > bed_length_mm:
             raise ValueError(f"unit {i + 1} ({L:.1f} mm) is longer than the bed "
                              f"({bed_length_mm:.1f} mm)")
-        if run + L > bed_length_mm + 1e-9:
-            pieces.append((start, i))
-            start, run = i, 0.0
-        run += L
+    pieces, start = [], 0
+    while sum(lengths[start:]) > bed_length_mm + 1e-9:
+        run, fits = 0.0, []
+        for i in range(start, len(units)):
+            run += lengths[i]
+            if run > bed_length_mm + 1e-9:
+                break
+            fits.append(i + 1)  # a cut after unit i keeps the piece within the bed
+        free = [j for j in fits if j < len(units) and
+                tab_face(units[j - 1], units[j]) is not None]
+        end = free[-1] if free else fits[-1]
+        pieces.append((start, end))
+        start = end
     pieces.append((start, len(units)))
     return pieces
+
+
+def tab_face(a: Unit, b: Unit):
+    """The face (-1, +1) where neither unit a nor the next one b has its arch, for the overlap
+    tab over their joint: -1 (the face not engraved) when free, else +1, else None."""
+    for face in (-1, 1):
+        if a.side != face and b.side != face:
+            return face
+    return None
+
+
+def tab_ends(a: Unit, b: Unit) -> tuple:
+    """How far (m) the overlap tab over the joint of unit a and the next unit b reaches into
+    each: their solid end regions, b + w (a spacer's side as far as the other's)."""
+    ea = None if a.is_spacer else a.b + a.w
+    eb = None if b.is_spacer else b.b + b.w
+    ea = ea if ea is not None else (eb if eb is not None else a.w)
+    return ea, eb if eb is not None else ea
 
 
 def base_sheet(units, bed_length_mm: float | None = None) -> Sheet:
@@ -154,9 +193,38 @@ def base_sheet(units, bed_length_mm: float | None = None) -> Sheet:
                                text=f"base piece {p}/{len(pieces)}: units {a + 1}-{b}, "
                                     f"{X[-1]:.1f} mm", height=3.0))
         y_off -= width + 2 * GAP
-    sheet.add("notes", Entity("MARKS", np.array([[0.0, width / 2 + 0.6 * GAP + 8.0]]),
-                              text=SIDE_NOTE, height=3.0))
+    for k, note in enumerate(SIDE_NOTE.split("; ")):
+        sheet.add("notes", Entity("MARKS", np.array([[0.0, width / 2 + 0.6 * GAP + 8.0 - 5 * k]]),
+                                  text=note + (";" if k == 0 else ""), height=3.0))
     return sheet
+
+
+def tab_sheet(units, bed_length_mm: float | None = None) -> Sheet:
+    """The overlap tabs T1... of the base pieces' joints, one under the other (empty when the
+    strip is one piece)."""
+    sheet = Sheet("tabs")
+    pieces = split_pieces(units, bed_length_mm)
+    width = max(4 * u.w for u in units) * 1e3
+    for j, (_, b) in enumerate(pieces[:-1], start=1):
+        _tab(sheet, j, units[b - 1], units[b], width, -(j - 1) * (width + GAP))
+    return sheet
+
+
+def _tab(sheet, j, a: Unit, b: Unit, width, yc):
+    """Overlap tab T<j> over joint J<j>: a rectangle 4w wide over both end regions, the joint
+    line engraved across its middle."""
+    ea, eb = (v * 1e3 for v in tab_ends(a, b))
+    length, x = ea + eb, ea  # the joint is ea from the tab's left end
+    face = tab_face(a, b)
+    part = f"tab {j}"
+    sheet.add(part, Entity("CUT", _rect(0, yc - width / 2, length, yc + width / 2), True))
+    inset = 0.1 * width
+    sheet.add(part, Entity("ENGRAVE", _line(x, yc - width / 2 + inset, x, yc + width / 2 - inset)))
+    sheet.add(part, Entity("ENGRAVE", np.array([[x / 2, yc]]), text=f"T{j}", height=0.3 * width))
+    where = {-1: "- face", 1: "+ face", None: "- face, under the arch end"}[face]
+    sheet.add(part, Entity("MARKS", np.array([[0.0, yc + width / 2 + 2.5]]),
+                           text=f"tab T{j}: {length:.1f} x {width:.1f} mm, across J{j}, {where}",
+                           height=3.0))
 
 
 def _joint(sheet, part, j, x, yc, u: Unit, direction):
@@ -185,7 +253,7 @@ def arch_sheet(units) -> Sheet:
         hgt = min(0.6 * w, 0.8 * end / max(1, 0.75 * len(label)))
         sheet.add(part, Entity("ENGRAVE", np.array([[0.5 * end, y + 0.5 * w]]), text=label,
                                height=hgt))
-        sheet.add(part, Entity("MARKS", np.array([[length + GAP, y + 0.5 * w]]),
+        sheet.add(part, Entity("MARKS", np.array([[0.0, y + w + 2.5]]),  # above: parts nest
                                text=f"arch {i}, side {'+' if u.side > 0 else '-'}: "
                                     f"{length:.1f} x {w:.1f} mm (h {u.h * 1e3:.1f}, "
                                     f"L {u.L * 1e3:.1f})", height=min(3.0, 0.8 * w)))
@@ -252,7 +320,8 @@ def write_dxf(sheet: Sheet, path, colours: dict | None = None) -> Path:
     msp = doc.modelspace()
     for e in sheet.entities:
         if e.text:
-            msp.add_text(e.text, height=e.height, dxfattribs={"layer": e.layer}).set_placement(
+            msp.add_text(e.text, height=e.height,
+                         dxfattribs={"layer": e.layer, "rotation": float(e.angle)}).set_placement(
                 tuple(map(float, e.points[0])),
                 align=TextEntityAlignment.MIDDLE_LEFT if e.left_aligned
                 else TextEntityAlignment.MIDDLE_CENTER)
@@ -266,16 +335,21 @@ def write_dxf(sheet: Sheet, path, colours: dict | None = None) -> Path:
     return path
 
 
-def write_svg(sheet: Sheet, path, colours: dict | None = None, margin: float = 5.0) -> Path:
-    """SVG in true millimetres (one group per layer)."""
+def write_svg(sheet: Sheet, path, colours: dict | None = None, margin: float = 5.0,
+              page=None) -> Path:
+    """SVG in true millimetres (one group per layer); page = (width, height) mm: the page is
+    that sheet, origin at its lower left corner (else the drawing's extent plus margin)."""
     from ezdxf.colors import aci2rgb
 
     colours = {**DEFAULT_COLOURS, **(colours or {})}
-    allp = np.vstack([e.points for e in sheet.entities])
-    widths = [0.6 * len(e.text) * e.height for e in sheet.entities if e.text]
-    x0, y0 = allp.min(axis=0) - margin
-    x1, y1 = allp.max(axis=0) + margin
-    x1 += max(widths, default=0.0)
+    if page is not None:
+        x0, y0, x1, y1 = 0.0, 0.0, float(page[0]), float(page[1])
+    else:
+        allp = np.vstack([e.points for e in sheet.entities])
+        widths = [0.6 * len(e.text) * e.height for e in sheet.entities if e.text]
+        x0, y0 = allp.min(axis=0) - margin
+        x1, y1 = allp.max(axis=0) + margin
+        x1 += max(widths, default=0.0)
     W, H = x1 - x0, y1 - y0
 
     def xy(p):
@@ -291,7 +365,9 @@ def write_svg(sheet: Sheet, path, colours: dict | None = None, margin: float = 5
                 continue
             if e.text:
                 p = e.points[0]
-                out.append(f'<text x="{p[0] - x0:.4f}" y="{y1 - p[1]:.4f}" '
+                turn = (f' transform="rotate({-e.angle:g} {p[0] - x0:.4f} {y1 - p[1]:.4f})"'
+                        if e.angle else "")
+                out.append(f'<text x="{p[0] - x0:.4f}" y="{y1 - p[1]:.4f}"{turn} '
                            f'font-size="{e.height:.3f}" '
                            f'text-anchor="{"start" if e.left_aligned else "middle"}" '
                            f'dominant-baseline="middle" fill="rgb({r},{g},{b})" stroke="none" '
@@ -312,16 +388,56 @@ def _xml(s: str) -> str:
     return s.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
+class BedWarning(UserWarning):
+    """A part larger than a common laser bed, drawings written without a bed."""
+
+
 def write_drawings(units, out_dir, bed_length_mm: float | None = None,
-                   colours: dict | None = None, mold_block_mm: float = 5.0) -> list[Path]:
-    """base/arches/molds as .dxf and .svg in out_dir; returns the paths written."""
+                   colours: dict | None = None, mold_block_mm: float = 5.0, *,
+                   bed=None, kerf_mm: float = 0.0, check: bool = True) -> list[Path]:
+    """The drawings as .dxf and .svg in out_dir; returns the paths written.
+
+    Without `bed`: base, tabs (when the strip is split: `bed_length_mm`), arches and molds,
+    one file pair each; a `BedWarning` for a part larger than `nesting.COMMON_BED`. With
+    bed = (width, height) mm (or "600x400"): the strip is split to fit the bed's long side,
+    and base pieces, tabs and arch blanks are nested on sheet-1, sheet-2, ... of that size;
+    the molds (3-D printed, not cut) stay on their own sheet. `kerf_mm`: closed cut paths
+    offset by kerf/2 (`kerf.compensate`). Every sheet is checked before it is written
+    (`drawing_checks`: closed cuts, no line twice; nested sheets: parts inside, no overlap);
+    a failed check raises ValueError (unless check is False)."""
+    import warnings
+
+    from snapmorph.design import nesting
+    from snapmorph.design.drawing_checks import assert_clean
+    from snapmorph.design.kerf import compensate
+
     units = list(units)
     out_dir = Path(out_dir)
+    size = None if bed is None else nesting.parse_bed(bed)
+    if size is not None and size[1] is None:  # a single number: a strip length, as before
+        bed_length_mm, size = (size[0] if bed_length_mm is None else
+                               min(bed_length_mm, size[0])), None
+    if size is not None:
+        longest = max(size) - 2 * nesting.MARGIN_MM
+        bed_length_mm = longest if bed_length_mm is None else min(bed_length_mm, longest)
+    cut = [base_sheet(units, bed_length_mm), tab_sheet(units, bed_length_mm)]
+    arched = any(not u.is_spacer for u in units)
+    if arched:
+        cut.append(arch_sheet(units))
+    cut = [compensate(s, kerf_mm) for s in cut if s.entities]
+    molds = [mold_sheet(units, mold_block_mm)] if arched else []
+    if size is None:
+        sheets, layout = cut + molds, None
+        for msg in nesting.oversize(nesting.parts_of(*cut), nesting.COMMON_BED):
+            warnings.warn(msg, BedWarning, stacklevel=2)
+    else:
+        sheets = nesting.nest_parts(nesting.parts_of(*cut), size) + molds
+        layout = {s.name: size for s in sheets[:len(sheets) - len(molds)]}
     paths = []
-    sheets = [base_sheet(units, bed_length_mm)]
-    if any(not u.is_spacer for u in units):
-        sheets += [arch_sheet(units), mold_sheet(units, mold_block_mm)]
     for sheet in sheets:
+        if check:
+            assert_clean(sheet, None if layout is None else layout.get(sheet.name))
         paths.append(write_dxf(sheet, out_dir / f"{sheet.name}.dxf", colours))
-        paths.append(write_svg(sheet, out_dir / f"{sheet.name}.svg", colours))
+        paths.append(write_svg(sheet, out_dir / f"{sheet.name}.svg", colours,
+                               page=None if layout is None else layout.get(sheet.name)))
     return paths

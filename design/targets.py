@@ -1,46 +1,29 @@
 """Target shapes for inverse design: reading, validating, and measuring deviations.
 
-Targets are polylines in m. A CSV target has columns x, y in mm (an optional third column,
-the tangent direction in degrees, makes its rows control points with tangents); a header line
-is optional.
+Targets are polylines in m. A CSV target has columns x, y (in mm unless its header says
+otherwise: `design.targets_csv`); a third column headed tangent_deg, the tangent direction in
+degrees, makes its rows control points with tangents.
 """
 
 from __future__ import annotations
 
-import csv
 import math
 from pathlib import Path
 
 import numpy as np
 
 
-def read_target_csv(path):
-    """(points (N, 2) in m, tangent angles (N,) in degrees or None) from a CSV in mm."""
+def read_target_csv(path, units=None):
+    """(points (N, 2) in m, tangent angles (N,) in degrees or None) from a CSV target: units
+    from the header (x_mm, x (in), x_m, x_cm) or `units`, else mm; a third column only when its
+    header names it (`design.targets_csv`)."""
+    from snapmorph.design.targets_csv import read_csv
+
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"target file not found: {path}")
-    rows = []
-    with path.open(newline="") as fh:
-        for n, row in enumerate(csv.reader(fh), start=1):
-            cells = [c.strip() for c in row if c.strip() != ""]
-            if not cells or cells[0].startswith("#"):
-                continue
-            try:
-                rows.append([float(c) for c in cells])
-            except ValueError:
-                if not rows and n == 1:
-                    continue  # header
-                raise ValueError(f"{path}, line {n}: not a number in {row}") from None
-    if not rows:
-        raise ValueError(f"{path}: no points (expected lines 'x_mm, y_mm[, tangent_deg]')")
-    widths = {len(r) for r in rows}
-    if len(widths) != 1 or widths.pop() not in (2, 3):
-        raise ValueError(f"{path}: every line needs 2 values (x, y in mm) or 3 (x, y, tangent "
-                         "angle in degrees)")
-    data = np.array(rows, dtype=float)
-    points = data[:, :2] * 1e-3
-    tangents = data[:, 2] if data.shape[1] == 3 else None
-    return points, tangents
+    mm, tangents, _, _ = read_csv(path, units=units)
+    return mm * 1e-3, tangents
 
 
 def check_points(points, minimum: int, what: str = "target points") -> np.ndarray:

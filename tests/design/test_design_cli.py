@@ -105,7 +105,7 @@ def test_fk_bad_state(tmp_path, capsys, synthetic_map_path):
     assert code == 2 and "1 characters" in err
 
 
-SVG_ARC = ('<svg xmlns="http://www.w3.org/2000/svg" width="400mm" height="300mm">'
+SVG_ARC = ('<svg xmlns="http://www.w3.org/2000/svg" width="400mm" height="300mm" viewBox="0 0 400 300">'
            '<path d="M 0 250 A 200 200 0 0 0 200 50" fill="none" stroke="black"/></svg>')
 
 

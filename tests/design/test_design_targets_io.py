@@ -117,15 +117,19 @@ def test_svg_refusals(d, message):
 
 
 def test_read_svg_file_flips_y_to_mm(tmp_path):
+    """A mm document (its viewBox makes one user unit one mm; without a viewBox a user unit
+    is a px, 1/96 in: test_targets_svg)."""
     f = tmp_path / "t.svg"
-    f.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="300mm" height="200mm">'
-                 '<g><path d="M 0 100 L 200 0" stroke="black"/></g></svg>')
+    f.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="300mm" height="200mm" '
+                 'viewBox="0 0 300 200"><g><path d="M 0 100 L 200 0" stroke="black"/></g></svg>')
     pts, tangents = read_target(f)
     assert tangents is None
     assert np.allclose(pts, [[0, -0.1], [0.2, 0.0]])  # y up, m
-    _refused(tmp_path / "none.svg",
+    _refused(tmp_path / "none.svg",  # a rect is no target
              '<svg xmlns="http://www.w3.org/2000/svg"><rect width="5" height="5"/></svg>',
-             "no <path")
+             "only closed curves")
+    _refused(tmp_path / "text.svg",
+             '<svg xmlns="http://www.w3.org/2000/svg"><text>target</text></svg>', "no curve")
     _refused(tmp_path / "broken.svg", "<svg", "not a readable SVG")
 
 
@@ -142,7 +146,7 @@ def test_dxf_polyline_with_bulge(tmp_path):
     (counter-clockwise, below the chord), then a straight to (300, 0)."""
     import ezdxf
 
-    doc = ezdxf.new("R2000")
+    doc = ezdxf.new("R2000", units=4)  # $INSUNITS = mm (ezdxf's default is metres)
     doc.modelspace().add_lwpolyline([(0, 0, 0, 0, 1.0), (200, 0, 0, 0, 0), (300, 0, 0, 0, 0)],
                                     format="xyseb")
     f = tmp_path / "t.dxf"
@@ -166,10 +170,11 @@ def test_dxf_refusals(tmp_path):
     with pytest.raises(ValueError, match="closed"):
         read_target(f)
     doc = ezdxf.new("R2000")
-    doc.modelspace().add_line((0, 0), (1, 1))
-    g = tmp_path / "line.dxf"
+    doc.modelspace().add_point((0, 0))  # a LINE is read now (test_targets_dxf), a POINT never
+    doc.modelspace().add_text("target")
+    g = tmp_path / "point.dxf"
     doc.saveas(g)
-    with pytest.raises(ValueError, match="no LWPOLYLINE"):
+    with pytest.raises(ValueError, match="no curve"):
         read_target(g)
     _refused(tmp_path / "junk.dxf", "not a dxf", "not a readable DXF")
     with pytest.raises(ValueError, match="not found"):
