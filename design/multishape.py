@@ -1,0 +1,840 @@
+"""One array, several shapes: inverse design for a set of targets, each reached by a snap
+pattern (issue 24).
+
+    from snapmorph.design import inverse_design_multi
+    md = inverse_design_multi(["C.svg", "S.svg"], t=0.5e-3, w=5e-3, tol=0.02, verify=True)
+    md.units, md.patterns, md.deviations, md.met, md.verification, md.write("build/CS")
+
+What is designed
+----------------
+One array (its units' sides, lengths L and heights h, and its spacers) and one snap pattern per
+target, chosen together so that forward kinematics through the design map puts the array
+within `tol` × length of every target (best rigid placement per target by default: each
+shape is held on its own). The base is inextensible: every state has the array's one length
+Λ = Σ L, and unit i covers the same stretch [S_i, S_i+1] of the base in every state. In the
+stretch of a unit, each target must therefore either stay straight (the unit unsnapped) or
+turn by that unit's one snapped turning side · θ_i (snapped). Targets of different lengths
+cannot all be met (refused, `_check_lengths`).
+
+Method: a discrete layout, continuous least squares, and an exact pattern search, alternated
+----------------------------------------------------------------------------------------------
+1. **Layout by error diffusion over slots** (`_slot_layout`). The common arc length is cut into
+   N equal slots; slot j asks target k to turn D_kj (its tangent's change over the slot).
+   Walking the slots, each target carries the turning still owed (r_k, the error carried
+   forward, as in error-diffusion dithering). In slot j the unit is chosen among a spacer and,
+   for each side σ = ±1 and each subset A of the targets owed turning of that sign, a unit of
+   side σ snapped exactly in the targets of A turning τ = mean of what they owe (clipped to the
+   map's θ range): the choice that leaves the smallest Σ r_k². Mirror images interleave left
+   and right units, straight-plus-curved pieces get units snapped only where each target
+   curves, a common curve one unit snapped in every target. That is 1 + 2 (2^K − 1) choices per
+   slot, O(N 2^K K).
+2. **Least squares over everything continuous at once** (`_JointFit`): every unit's (L, h/L),
+   every spacer's L and one placement per target, the residuals being the arc-length-matched
+   distances of all K predicted states to their targets (160 pairs each), through the map's
+   vectorised interpolants (`design.inverse._FastModel`, the same numbers as
+   `design.kinematics.chain`); Jacobians by forward differences, one map lookup for all
+   perturbed units; then Lawson re-weightings towards the largest distance of any target.
+3. **Exact pattern re-selection** (`design.nearest.branch_and_bound`): for the fitted units,
+   each target's pattern is searched over all 2ⁿ states by branch and bound in that target's
+   fitted frame; if a better pattern exists, the fit (2) is repeated with it (at most
+   `PATTERN_ROUNDS` times). So the patterns are not fixed by the layout's guess.
+4. **Number of units**: N runs from the fewest slots that can hold the turning
+   (ceil(Φ⁺/θ_max) + ceil(Φ⁻/θ_max) for the target that needs most) upwards,
+   each N with units filling their slot and with units of 60 % of it between spacers; after a
+   miss by d > tol the next N is about N sqrt(d / tol) (polygon-like errors fall as 1/N²),
+   never more than N + 4, never beyond Λ / L_min slots or `max_units`. It stops at the first
+   design meeting tol on every target; otherwise it returns the best one (smallest worst
+   deviation), `met` False for the targets it misses, and a warning.
+
+Cost: per N, one least squares of p = 2 n_arched + n_spacers + 3K unknowns and 320 K
+residuals (a Jacobian is one map lookup of p shapes and K (p + 1) placed chains, about 10 ms
+for n = 12), a few Lawson rounds, and K branch-and-bound searches (milliseconds for designed
+arrays: the stretches tell the states apart). A two-target design of about 12 units takes a
+few seconds (`bench/bench_multishape.py`).
+
+Verification (`verify_multi`, `verify=True`): the whole array simulated in each pattern
+(`design.arrays.simulate_array` on one mesh, the pattern's units snapped in order, actuators
+off), its base measured against its target both ways.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+# Private helpers of the single-target design, used as they are (one mechanism for each job):
+# the vectorised map model, the fabrication limits, h/L for a turning, batch resampling and
+# the argument checks.
+from snapmorph.design.inverse import (_EDGE, _N_FIT, Limits, _FastModel, _StateMap, _choice,
+                                      _fraction, _hL_for_turn, _limits, _map_state_kw,
+                                      _positive, _resample_batch)
+from snapmorph.design.nearest import (branch_and_bound, matched_costs, measure, pattern_table,
+                                      _pattern_to_mask, _mask_to_pattern, _reference)
+from snapmorph.design.targets import Target, place_rigid
+from snapmorph.design.units import Unit
+
+__all__ = ["MultiDesign", "inverse_design_multi", "verify_multi"]
+
+PLACEMENTS = ("best", "clamped")
+STATES = ("released", "actuated")
+#: fit / re-select rounds per layout
+PATTERN_ROUNDS = 3
+#: the units' share of their slot in the two layouts tried per N
+SHARES = (1.0, 0.6)
+#: the shortest spacer (m) of a multi-shape design (`inverse_design` allows 1 mm): the
+#: whole-array mesh gives a spacer as many nodes as a unit, and a 1 mm spacer's micrometre
+#: edges stall the simulation's Newton iterations (step size underflow); 3 mm and more do not
+SPACER_MIN = 5e-3
+
+
+# =============================================================================================
+# The result
+# =============================================================================================
+@dataclass
+class MultiDesign:
+    """An array and one snap pattern per target (SI; deviations as fractions of each target's
+    length, placements (x0, y0, angle) m, m, rad of unit 1's start in the target's frame).
+
+    patterns[k]: one bool per unit, True = snapped, for target k; deviations[k]: {"best":
+    (max, rms), "clamped": (max, rms)} of the map's prediction; met[k]: deviation with
+    `placement_mode` <= tol; verification[k] (after `verify_multi`): the whole array simulated
+    in pattern k ({"status", "time", "xy", "deviations", "max_deviation", ...})."""
+
+    units: list
+    patterns: tuple
+    targets: list
+    names: tuple
+    predicted: list
+    deviations: list
+    placements: list
+    placement_mode: str
+    tol: float
+    met: tuple
+    t: float
+    w: float
+    state: str = "released"
+    limits: Limits | None = None
+    verification: list | None = None
+    history: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    time: float = 0.0
+
+    # --- views ------------------------------------------------------------------------------
+    @property
+    def target_lengths(self) -> tuple:
+        return tuple(t.length for t in self.targets)
+
+    @property
+    def array_length(self) -> float:
+        return float(sum(u.L for u in self.units))
+
+    @property
+    def states(self) -> tuple:
+        """The patterns as '0'/'1' strings (character i: unit i + 1 snapped)."""
+        return tuple("".join("1" if p else "0" for p in pat) for pat in self.patterns)
+
+    @property
+    def max_deviations(self) -> tuple:
+        """Each target's predicted max deviation with `placement_mode`."""
+        return tuple(d[self.placement_mode][0] for d in self.deviations)
+
+    @property
+    def simulated_deviations(self) -> tuple | None:
+        """Each target's simulated max deviation with `placement_mode` (None until verified)."""
+        if self.verification is None:
+            return None
+        return tuple(v["deviations"][self.placement_mode][0] for v in self.verification)
+
+    @property
+    def met_all(self) -> bool:
+        return all(self.met)
+
+    def __repr__(self):
+        n = sum(not u.is_spacer for u in self.units)
+        devs = ", ".join(f"{100 * d:.3g} %" for d in self.max_deviations)
+        return (f"MultiDesign({n} arched units + {len(self.units) - n} spacers, "
+                f"{len(self.targets)} targets, {self.array_length * 1e3:.1f} mm, max deviations "
+                f"{devs} ({self.placement_mode}), tol {100 * self.tol:.3g} % "
+                f"{'met' if self.met_all else 'MISSED'})")
+
+    def table(self) -> str:
+        """The units (mm, degrees) and, per target, whether each is snapped (1) or not (0)."""
+        head = f"{'unit':>4} {'L_mm':>7} {'h_mm':>6} {'h/L':>6} {'side':>4} {'theta_deg':>9} "
+        head += " ".join(f"{'T' + str(k + 1):>3}" for k in range(len(self.patterns)))
+        lines = [head]
+        turns = self._turns()
+        for i, u in enumerate(self.units):
+            hl = f"{u.h / u.L:6.3f}" if u.h > 0 else "     -"
+            side = f"{u.side:+d}" if u.side else "0"
+            th = f"{turns[i]:9.2f}" if not u.is_spacer else "        -"
+            flags = " ".join(f"{'1' if p[i] else '0':>3}" for p in self.patterns)
+            lines.append(f"{i + 1:>4} {u.L * 1e3:7.1f} {u.h * 1e3:6.1f} {hl} {side:>4} {th} {flags}")
+        return "\n".join(lines)
+
+    def _turns(self):
+        from snapmorph.design.kinematics import chain
+        from snapmorph.design.lookup import MapLookup
+
+        if not hasattr(self, "_turn_cache"):
+            ch = chain(self.units, None, lookup=MapLookup(self._dm) if hasattr(self, "_dm")
+                       else None, state=self.state)
+            self._turn_cache = np.degrees(np.diff(ch.angles))
+        return self._turn_cache
+
+    def summary(self) -> str:
+        """The table, each target's pattern and deviations, as `snapmorph design` prints them."""
+        n = sum(not u.is_spacer for u in self.units)
+        text = [self.table(),
+                f"array length {self.array_length * 1e3:.1f} mm; {n} arched units, "
+                f"{len(self.units) - n} spacers; map state {self.state}; "
+                f"{len(self.targets)} targets, tol {100 * self.tol:.2f} % ({self.placement_mode} "
+                "placement)",
+                "target, length, snap pattern (unit 1 first), deviation % of its length "
+                "(max / RMS) predicted and simulated, best placement | clamped:"]
+        for k, name in enumerate(self.names):
+            d = self.deviations[k]
+            line = (f"  T{k + 1} {name}: {self.targets[k].length * 1e3:.1f} mm, pattern "
+                    f"{self.states[k]}; predicted {100 * d['best'][0]:.2f} / "
+                    f"{100 * d['best'][1]:.2f} | {100 * d['clamped'][0]:.2f} / "
+                    f"{100 * d['clamped'][1]:.2f}")
+            if self.verification is not None:
+                v = self.verification[k]
+                line += (f"; simulated ({v['status']}, {v['time']:.1f} s) "
+                         f"{100 * v['deviations']['best'][0]:.2f} / "
+                         f"{100 * v['deviations']['best'][1]:.2f} | "
+                         f"{100 * v['deviations']['clamped'][0]:.2f} / "
+                         f"{100 * v['deviations']['clamped'][1]:.2f}")
+            dev = d[self.placement_mode][0]
+            line += (f"  -> met ({100 * dev:.2f} % <= {100 * self.tol:.2f} %, "
+                     f"{dev * self.targets[k].length * 1e3:.2f} mm)" if self.met[k] else
+                     f"  -> TOLERANCE MISSED ({100 * dev:.2f} % > {100 * self.tol:.2f} %, "
+                     f"{dev * self.targets[k].length * 1e3:.2f} mm)")
+            text.append(line)
+        if not self.met_all:
+            text.append("TOLERANCE MISSED for " + ", ".join(
+                f"T{k + 1}" for k, m in enumerate(self.met) if not m) + ": this is the best "
+                "design found")
+        text += [f"note: {note}" for note in self.notes]
+        return "\n".join(text)
+
+    def morph_plan(self, a: int, b: int, **kw):
+        """The reconfiguration from target a's pattern to target b's (0-based indices):
+        `design.reconfigure.morph_plan`, drawn in target a's frame."""
+        from snapmorph.design.reconfigure import morph_plan
+
+        kw.setdefault("placement", self.placements[a][self.placement_mode])
+        kw.setdefault("state", self.state)
+        if hasattr(self, "_dm"):
+            kw.setdefault("design_map", self._dm)
+        return morph_plan(self.units, self.patterns[a], self.patterns[b], **kw)
+
+    def write(self, out_dir, bed_length_mm: float | None = None, colours: dict | None = None,
+              drawings: bool = True) -> list:
+        """Write units.csv (with target 1's placement line), patterns.csv, predicted_k.csv
+        (and simulated_k.csv), one overlay plot per target (target_k.png), one figure of all
+        targets with their patterns (patterns.png), the morphing plan between consecutive
+        targets (morph.png), design.txt and the DXF/SVG drawings; returns the paths (mm)."""
+        from pathlib import Path
+
+        from snapmorph.design.multishape_plots import plot_patterns, plot_target_overlay
+        from snapmorph.design.units import write_units_csv
+
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        mode = self.placement_mode
+        units_csv = write_units_csv(self.units, out / "units.csv",
+                                    placement=self.placements[0][mode])
+        if not self.met_all:
+            lines = units_csv.read_text().splitlines(keepends=True)
+            note = ("# TOLERANCE MISSED for " + ", ".join(
+                f"T{k + 1} ({100 * self.max_deviations[k]:.2f} % > {100 * self.tol:.2f} %)"
+                for k, m in enumerate(self.met) if not m) + f"; best design found ({mode} "
+                "placement)\n")
+            units_csv.write_text("".join(lines[:1] + [note] + lines[1:]))
+        paths = [units_csv, self._write_patterns(out / "patterns.csv")]
+        for k in range(len(self.targets)):
+            p = out / f"predicted_{k + 1}.csv"
+            np.savetxt(p, self.predicted[k] * 1e3, delimiter=",", fmt="%.4f",
+                       header="x_mm,y_mm", comments="")
+            paths.append(p)
+            if self.verification is not None:
+                p = out / f"simulated_{k + 1}.csv"
+                np.savetxt(p, self.verification[k]["xy"] * 1e3, delimiter=",", fmt="%.4f",
+                           header="x_mm,y_mm", comments="")
+                paths.append(p)
+            paths.append(plot_target_overlay(self, k, out / f"target_{k + 1}.png"))
+        paths.append(plot_patterns(self, out / "patterns.png"))
+        if len(self.targets) >= 2:
+            from snapmorph.design.multishape_plots import plot_morph_plans
+
+            paths.append(plot_morph_plans(self, out / "morph.png"))
+        (out / "design.txt").write_text(self.summary() + "\n")
+        paths.append(out / "design.txt")
+        if drawings:
+            from snapmorph.design.drawings import write_drawings
+
+            paths += write_drawings(self.units, out, bed_length_mm=bed_length_mm,
+                                    colours=colours)
+        return paths
+
+    def _write_patterns(self, path):
+        """patterns.csv: one line per target: its name, pattern, placement (mm, deg), length
+        and deviations (%), and whether tol is met."""
+        import csv
+
+        with open(path, "w", newline="") as fh:
+            wr = csv.writer(fh)
+            wr.writerow(["target", "name", "pattern", "x0_mm", "y0_mm", "angle_deg", "length_mm",
+                         "predicted_best_pct", "predicted_clamped_pct", "simulated_best_pct",
+                         "simulated_clamped_pct", "met"])
+            for k, name in enumerate(self.names):
+                x0, y0, a = self.placements[k][self.placement_mode]
+                d = self.deviations[k]
+                sim = ("", "")
+                if self.verification is not None:
+                    v = self.verification[k]["deviations"]
+                    sim = (f"{100 * v['best'][0]:.4f}", f"{100 * v['clamped'][0]:.4f}")
+                wr.writerow([k + 1, name, self.states[k], f"{x0 * 1e3:.6g}", f"{y0 * 1e3:.6g}",
+                             f"{math.degrees(a):.6g}", f"{self.targets[k].length * 1e3:.3f}",
+                             f"{100 * d['best'][0]:.4f}", f"{100 * d['clamped'][0]:.4f}", *sim,
+                             "yes" if self.met[k] else "no"])
+        return path
+
+
+# =============================================================================================
+# Inputs
+# =============================================================================================
+def _read_targets(targets) -> tuple[list, tuple]:
+    """(list of Target, names) from the targets argument: a list or tuple of at least two."""
+    from pathlib import Path
+
+    from snapmorph.design.target_input import as_target
+
+    if isinstance(targets, (str, bytes, Target, np.ndarray)) or hasattr(targets, "__fspath__") \
+            or not isinstance(targets, (list, tuple)):
+        raise ValueError("targets must be a list of at least two targets (each (N, 2) points in "
+                         "m, a .csv/.svg/.dxf file in mm or a design.Target); got "
+                         f"{type(targets).__name__} (for one target use design.inverse_design)")
+    if len(targets) < 2:
+        raise ValueError(f"targets must list at least two targets (one shape per snap "
+                         f"pattern); got {len(targets)} (for one target use "
+                         "design.inverse_design)")
+    out, names = [], []
+    for k, obj in enumerate(targets):
+        out.append(as_target(obj, what=f"target {k + 1}"))
+        names.append(Path(obj).name if isinstance(obj, str) or hasattr(obj, "__fspath__")
+                     else f"target {k + 1}")
+    return out, tuple(names)
+
+
+def _check_lengths(targets, tol: float, placement: str) -> None:
+    """Refuse targets whose lengths no array of one length can meet within tol.
+
+    The base does not stretch: every state is Λ long. Even for straight targets (where the
+    length is all that matters) the best placement leaves |Λ − ℓ_k| / 2 at each end and the
+    clamped one |Λ − ℓ_k| at the free end, so two targets can both be met only if
+    |ℓ_a − ℓ_b| <= 2 tol (ℓ_a + ℓ_b) (best) or tol (ℓ_a + ℓ_b) (clamped)."""
+    ell = [t.length for t in targets]
+    factor = 2.0 if placement == "best" else 1.0
+    for a in range(len(ell)):
+        for b in range(a + 1, len(ell)):
+            allowed = factor * tol * (ell[a] + ell[b])
+            if abs(ell[a] - ell[b]) > allowed:
+                raise ValueError(
+                    f"targets {a + 1} and {b + 1} differ in length: {ell[a] * 1e3:.1f} mm and "
+                    f"{ell[b] * 1e3:.1f} mm; the base does not stretch, so every state of an "
+                    f"array has one length, and with tol = {100 * tol:g} % ({placement} "
+                    f"placement) lengths may differ by at most {allowed * 1e3:.1f} mm; scale "
+                    "the targets to one length")
+
+
+# =============================================================================================
+# 1. The layout: error diffusion over slots
+# =============================================================================================
+def _turning_profiles(targets, u) -> np.ndarray:
+    """Each target's tangent direction at arc-length fractions u, relative to its start
+    (degrees, unwrapped): (K, len(u))."""
+    return np.array([np.degrees(np.interp(u * t.length, t.s, t.angle) - t.angle[0])
+                     for t in targets])
+
+
+def _slot_counts_min(targets, lim: Limits) -> int:
+    """The fewest slots that can hold the turning: a unit turns one way, by at most θ_max, so
+    the array needs at least max_k ceil(Φ⁺_k / θ_max) left-turning units and max_k
+    ceil(Φ⁻_k / θ_max) right-turning ones (Φ±_k target k's total left / right turning; turning
+    below θ_min / 2 needs no unit); at least one slot."""
+    phi = _turning_profiles(targets, np.linspace(0.0, 1.0, 801))
+    d = np.diff(phi, axis=1)
+    need = {1: 0, -1: 0}
+    for row in d:
+        for sgn in (1, -1):
+            total = float(sgn * row[sgn * row > 0].sum())
+            if total >= 0.5 * lim.theta_min:
+                need[sgn] = max(need[sgn], math.ceil(total / lim.theta_max - 1e-9))
+    return max(1, need[1] + need[-1])
+
+
+def _slot_layout(targets, N: int, share: float, lim: Limits, dm, t, w, length: float):
+    """(sides, L, h/L, patterns (K, n) bool) of the error-diffusion layout with N slots (see
+    the module docstring, step 1)."""
+    K = len(targets)
+    edges = np.linspace(0.0, 1.0, N + 1)
+    phi = _turning_profiles(targets, edges)
+    D = np.diff(phi, axis=1)  # (K, N) degrees
+    slot = length / N
+    owed = np.zeros(K)
+    subsets = [tuple(k for k in range(K) if (m >> k) & 1) for m in range(1, 2 ** K)]
+    items = []  # (side, L, hL, snapped targets)
+    for j in range(N):
+        want = owed + D[:, j]
+        best = (float(want @ want), 0, 0.0, ())
+        for sgn in (1, -1):
+            for A in subsets:
+                if not all(sgn * want[k] > 0 for k in A):
+                    continue
+                tau = float(np.clip(np.mean([sgn * want[k] for k in A]), lim.theta_min,
+                                    lim.theta_max))
+                left = want.copy()
+                left[list(A)] -= sgn * tau
+                cost = float(left @ left)
+                if cost < best[0] - 1e-12:
+                    best = (cost, sgn, tau, A)
+        _, sgn, tau, A = best
+        if sgn == 0:
+            items.append((0, slot, 0.0, ()))
+            owed = want
+            continue
+        L = float(np.clip(share * slot, lim.L_min, lim.L_max))
+        gap = max(0.0, slot - L)
+        if gap >= 2 * lim.spacer_min:
+            items.append((0, gap / 2, 0.0, ()))
+        hL = _hL_for_turn(dm, tau, L, t, w, lim, {})
+        items.append((sgn, L, hL, A))
+        if gap >= 2 * lim.spacer_min:
+            items.append((0, gap / 2, 0.0, ()))
+        owed = want.copy()
+        owed[list(A)] -= sgn * tau
+    merged = []
+    for it in items:
+        if it[0] == 0 and merged and merged[-1][0] == 0:
+            merged[-1] = (0, merged[-1][1] + it[1], 0.0, ())
+        else:
+            merged.append(it)
+    merged = [it for it in merged if it[0] != 0 or it[1] >= lim.spacer_min]
+    if not merged:
+        merged = [(0, length, 0.0, ())]
+    sides = np.array([it[0] for it in merged], dtype=int)
+    pats = np.array([[k in it[3] for it in merged] for k in range(K)], dtype=bool)
+    return (sides, np.array([it[1] for it in merged]), np.array([it[2] for it in merged]),
+            pats)
+
+
+# =============================================================================================
+# 2. Least squares over every unit and every target's placement
+# =============================================================================================
+class _JointFit:
+    """Least squares over every unit's (L, h/L), every spacer's L and, for the best placement,
+    one start point and direction per target: residuals are the arc-length-matched distances
+    of each target's predicted state (its pattern's units snapped) to the target, all targets
+    at once. Jacobians by forward differences; every perturbed unit looked up in one call."""
+
+    def __init__(self, model: _FastModel, patterns, targets, lim: Limits, placement: str):
+        self.m, self.lim, self.placement = model, lim, placement
+        self.patterns = np.asarray(patterns, dtype=bool)
+        self.targets = targets
+        self.K = len(targets)
+        self.n = len(model.sides)
+        self.u = np.linspace(0.0, 1.0, _N_FIT)
+        self.refs = []
+        for tg in targets:
+            p = tg.at_fraction(self.u)
+            self.refs.append(p[:, 0] + 1j * p[:, 1])
+        self.Lref = float(np.mean([tg.length for tg in targets]))
+        self.lin = np.linspace(0.0, 1.0, model.M)
+        self.index = []
+        for i in range(self.n):
+            self.index.append((i, "L"))
+            if model.sides[i] != 0:
+                self.index.append((i, "hL"))
+        if placement == "best":
+            for k in range(self.K):
+                self.index += [(-1 - k, "x"), (-1 - k, "y"), (-1 - k, "a")]
+
+    # --- parameters -----------------------------------------------------------------------
+    def pack(self, L, hL, frames):
+        v = []
+        for i, what in self.index:
+            if i >= 0:
+                v.append(L[i] / self.Lref if what == "L" else hL[i])
+            else:
+                x0, y0, a0 = frames[-1 - i]
+                v.append({"x": x0 / self.Lref, "y": y0 / self.Lref, "a": a0}[what])
+        return np.array(v)
+
+    def unpack(self, v):
+        L, hL = np.zeros(self.n), np.zeros(self.n)
+        frames = [[float(tg.start[0]), float(tg.start[1]), tg.start_angle] for tg in self.targets]
+        for (i, what), x in zip(self.index, v):
+            if i >= 0:
+                if what == "L":
+                    L[i] = x * self.Lref
+                else:
+                    hL[i] = x
+            else:
+                j = "xya".index(what)
+                frames[-1 - i][j] = x * self.Lref if j < 2 else x
+        return L, hL, [tuple(f) for f in frames]
+
+    def bounds(self):
+        lo, hi, lim = [], [], self.lim
+        for i, what in self.index:
+            if i < 0:
+                lo.append(-np.inf)
+                hi.append(np.inf)
+            elif what == "hL":
+                lo.append(lim.hL_min * (1 + _EDGE))
+                hi.append(lim.hL_max * (1 - _EDGE))
+            elif self.m.sides[i] != 0:
+                # a hair inside the limits: units.csv rounds to mm (as design.inverse)
+                lo.append(lim.L_min * (1 + _EDGE) / self.Lref)
+                hi.append(lim.L_max * (1 - _EDGE) / self.Lref)
+            else:
+                lo.append(lim.spacer_min / self.Lref)
+                hi.append(2.0)
+        return np.array(lo), np.array(hi)
+
+    # --- shapes and residuals -------------------------------------------------------------
+    def shapes(self, L, hL):
+        """(snapped shapes (n, M) complex m, end turns (n,) rad, straight shapes (n, M)); the
+        last answer is kept (least squares asks for the residuals and then the Jacobian at the
+        same point)."""
+        key = (L.tobytes(), hL.tobytes())
+        if getattr(self, "_last", (None,))[0] != key:
+            zs, ts = self.m.unit_frames(np.arange(self.n), L, hL)
+            self._last = (key, (zs, ts, L[:, None] * self.lin[None, :]))
+        return self._last[1]
+
+    def chains(self, zs, ts, zf, k, starts, angles):
+        """Target k's state placed from starts (B,) complex heading angles (B,): (B, K') complex."""
+        pat = self.patterns[k]
+        Z = np.where(pat[None, :, None], zs, zf)
+        T = np.where(pat[None, :], ts, 0.0)
+        return self.m.assemble(Z, T, starts, angles)
+
+    def _res(self, k, poly):
+        p = _resample_batch(poly, self.u)
+        d = (p - self.refs[k][None]) / self.Lref
+        r = np.stack([d.real, d.imag], axis=-1).reshape(len(poly), -1)
+        return np.where(np.isfinite(r), r, 1.0)
+
+    def residuals(self, v):
+        L, hL, frames = self.unpack(v)
+        zs, ts, zf = self.shapes(L, hL)
+        out = []
+        for k, (x0, y0, a0) in enumerate(frames):
+            poly = self.chains(zs[None], ts[None], zf[None], k, np.array([x0 + 1j * y0]),
+                               np.array([a0]))
+            out.append(self._res(k, poly)[0])
+        return np.concatenate(out)
+
+    def jac(self, v):
+        lo, hi = self.bounds()
+        step = 1e-6 * np.maximum(1.0, np.abs(v))
+        h = np.where(v + step > hi, -1.0, 1.0) * step
+        L, hL, frames = self.unpack(v)
+        zs0, ts0, zf0 = self.shapes(L, hL)
+        P = len(v)
+        Zs = np.repeat(zs0[None], P + 1, axis=0)
+        Ts = np.repeat(ts0[None], P + 1, axis=0)
+        Zf = np.repeat(zf0[None], P + 1, axis=0)
+        S = np.array([[f[0] + 1j * f[1] for f in frames]] * (P + 1))
+        A = np.array([[f[2] for f in frames]] * (P + 1))
+        units, Ls, hLs, rows = [], [], [], []
+        for r, (i, what) in enumerate(self.index, start=1):
+            if i < 0:
+                k = -1 - i
+                if what == "x":
+                    S[r, k] += h[r - 1] * self.Lref
+                elif what == "y":
+                    S[r, k] += 1j * h[r - 1] * self.Lref
+                else:
+                    A[r, k] += h[r - 1]
+                continue
+            Li = L[i] + (h[r - 1] * self.Lref if what == "L" else 0.0)
+            hLi = hL[i] + (h[r - 1] if what == "hL" else 0.0)
+            units.append(i)
+            Ls.append(Li)
+            hLs.append(hLi)
+            rows.append(r)
+        if units:
+            zp, tp = self.m.unit_frames(np.array(units), np.array(Ls), np.array(hLs))
+            Zs[rows, units] = zp
+            Ts[rows, units] = tp
+            Zf[rows, units] = np.array(Ls)[:, None] * self.lin[None, :]
+        blocks = []
+        for k in range(self.K):
+            R = self._res(k, self.chains(Zs, Ts, Zf, k, S[:, k], A[:, k]))
+            blocks.append(((R[1:] - R[0]) / h[:, None]).T)
+        return np.vstack(blocks)
+
+    def solve(self, v0, weights=None, max_nfev=25):
+        from scipy.optimize import least_squares
+
+        lo, hi = self.bounds()
+        v0 = np.clip(v0, lo + 1e-12, hi - 1e-12)
+        if weights is None:
+            fun, jac = self.residuals, self.jac
+        else:
+            fun = lambda v: weights * self.residuals(v)  # noqa: E731
+            jac = lambda v: weights[:, None] * self.jac(v)  # noqa: E731
+        sol = least_squares(fun, v0, jac=jac, bounds=(lo, hi), x_scale="jac", xtol=1e-7,
+                            ftol=1e-6, gtol=1e-8, max_nfev=max_nfev, method="trf")
+        return sol.x, int(sol.nfev)
+
+    def solve_minimax(self, v0, tol):
+        """Least squares, then up to three Lawson re-weightings towards the largest distance
+        of any target, unless every matched distance is already within tol / 2."""
+        v, nfev = self.solve(v0)
+        weights = np.ones(len(self.residuals(v)))
+        for _ in range(3):
+            d = np.hypot(*self.residuals(v).reshape(-1, 2).T)
+            if not np.all(np.isfinite(d)) or d.max() <= 0.5 * tol:
+                break
+            weights = weights * np.repeat(np.maximum(d / d.max(), 0.05), 2)
+            weights = weights / np.sqrt(np.mean(weights ** 2))
+            v2, n2 = self.solve(v, weights=np.sqrt(weights), max_nfev=20)
+            nfev += n2
+            if np.max(np.hypot(*self.residuals(v2).reshape(-1, 2).T)) < d.max():
+                v = v2
+        return v, nfev
+
+
+# =============================================================================================
+# 3. Exact pattern re-selection
+# =============================================================================================
+def _reselect(fit: _JointFit, v) -> tuple[np.ndarray, list]:
+    """Each target's best pattern for the fitted units (branch and bound in the target's
+    fitted frame, the current pattern as the incumbent): (patterns (K, n), per target (old c,
+    new c, nodes))."""
+    L, hL, frames = fit.unpack(v)
+    zs, ts, _ = fit.shapes(L, hL)
+    arched = fit.m.sides != 0
+    table = pattern_table(zs, L, arched, ts)
+    new = fit.patterns.copy()
+    info = []
+    for k, tg in enumerate(fit.targets):
+        Q, Qj = _reference(table, tg, frames[k])
+        cur = _pattern_to_mask(fit.patterns[k])
+        c_cur = float(matched_costs(table, Q, [cur])[0])
+        found, nodes, _ = branch_and_bound(table, Q, Qj, top=1, seeds=[cur])
+        c_new, mask = found[0]
+        if mask != cur and c_new < 0.98 * c_cur:
+            new[k] = _mask_to_pattern(mask, fit.n)
+        info.append((c_cur, c_new, nodes))
+    return new, info
+
+
+# =============================================================================================
+# The design
+# =============================================================================================
+def _fit_layout(dm, t, w, sides, L, hL, pats, frames, tgts, lim, placement, tol):
+    """Fit a layout (step 2), re-select its patterns (step 3) and fit again while they change.
+    Returns (fit, v, evaluations, pattern entries changed)."""
+    nfev, changes = 0, 0
+    model = _FastModel(dm, t, w, sides, {})
+    fit = _JointFit(model, pats, tgts, lim, placement)
+    v = fit.pack(L, hL, frames)
+    for _ in range(PATTERN_ROUNDS):
+        v, n_ev = fit.solve_minimax(v, tol)
+        nfev += n_ev
+        new, _info = _reselect(fit, v)
+        if np.array_equal(new, fit.patterns):
+            break
+        changes += int(np.count_nonzero(new != fit.patterns))
+        fit = _JointFit(model, new, tgts, lim, placement)
+    return fit, v, nfev, changes
+
+
+def _units_from(sides, L, hL, t, w, b_over_L) -> list:
+    return [Unit(L=float(Li), h=0.0, t=t, w=w, side=0) if sd == 0 else
+            Unit(L=float(Li), h=float(hi * Li), t=t, w=w, side=int(sd), b=b_over_L * float(Li))
+            for sd, Li, hi in zip(sides, L, hL)]
+
+
+def _assess(fit: _JointFit, v, quick: bool):
+    """Each target's deviations and placements of the fitted design (its local chains through
+    the fast model, placed by `design.nearest.measure`); quick: a short placement search from
+    the fitted frame (while comparing layouts)."""
+    L, hL, frames = fit.unpack(v)
+    zs, ts, zf = fit.shapes(L, hL)
+    devs, places, locals_ = [], [], []
+    for k, tg in enumerate(fit.targets):
+        z = fit.chains(zs[None], ts[None], zf[None], k, np.zeros(1, complex), np.zeros(1))[0]
+        local = np.stack([z.real, z.imag], axis=-1)
+        x0, y0, a0 = frames[k]
+        d, p = measure(local, tg, start=(x0, y0), angle=a0, maxiter=80 if quick else 400,
+                       kabsch=not quick)
+        devs.append(d)
+        places.append(p)
+        locals_.append(local)
+    return devs, places, locals_
+
+
+def inverse_design_multi(targets, t: float, w: float, *, tol: float = 0.02,
+                         placement: str = "best", design_map=None, L_range=None,
+                         hL_range=None, min_barrier: float = 0.5, state: str = "released",
+                         max_units: int = 40, verify: bool = False, nodes: int | None = None,
+                         progress=None) -> MultiDesign:
+    """Design one array and one snap pattern per target so that the map's forward kinematics of
+    each pattern is within `tol` of its target (SI units; the method is in the module
+    docstring).
+
+    targets: a list of at least two targets, each (N, 2) points in m, a .csv/.svg/.dxf file in
+        mm or a `design.Target`, of one length (within what tol allows: refused otherwise,
+        with both lengths).
+    tol: largest deviation allowed, a fraction of each target's length (0 < tol < 1).
+    placement: "best" (each pattern after its best rigid placement on its target) or "clamped"
+        (unit 1's start on each target's start point and tangent). Both are reported.
+    L_range, hL_range, min_barrier, state, max_units: as in `design.inverse_design`.
+    verify: also simulate the whole array in each pattern (`verify_multi`; nodes per unit).
+    progress: None or a callable progress(stage) ("layouts", "verify").
+    Returns a `MultiDesign`; when tol is missed for some target it warns (`UserWarning`) and
+    returns the best design found with met[k] False there.
+    """
+    t0 = time.perf_counter()
+    t, w = _positive("t", t), _positive("w", w)
+    tol = _fraction("tol", tol)
+    placement = _choice("placement", placement, PLACEMENTS)
+    state = _choice("state", state, STATES)
+    if isinstance(max_units, bool) or not isinstance(max_units, (int, np.integer)) or max_units < 1:
+        raise ValueError(f"max_units must be an integer >= 1, got {max_units!r}")
+    try:
+        min_barrier = float(min_barrier)
+    except (TypeError, ValueError):
+        raise ValueError(f"min_barrier must be a number (E I_arch / L), got {min_barrier!r}") from None
+    if not (math.isfinite(min_barrier) and min_barrier >= 0):
+        raise ValueError(f"min_barrier must be >= 0 (E I_arch / L), got {min_barrier!r}")
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(stage); got {progress!r}")
+    tick = progress if progress is not None else (lambda stage: None)
+    tgts, names = _read_targets(targets)
+    _check_lengths(tgts, tol, placement)
+    from snapmorph.design.lookup import MapLookup, default_map
+
+    raw = design_map if design_map is not None else default_map()
+    state_kw, state_used = _map_state_kw(raw, state)
+    dm = _StateMap(raw, state_kw)
+    lim = dataclasses.replace(_limits(dm, t, w, L_range, hL_range, min_barrier, {}),
+                              spacer_min=SPACER_MIN)
+    b_over_L = MapLookup(dm).b_over_L
+    length = float(np.mean([tg.length for tg in tgts]))
+
+    n_lo = _slot_counts_min(tgts, lim)
+    n_hi = max(n_lo, int(length // lim.L_min))
+    N, tried, best, seen = n_lo, [], None, set()
+    while True:
+        worst_n = None
+        for share in SHARES:
+            sides, L, hL, pats = _slot_layout(tgts, N, share, lim, dm, t, w, length)
+            n_arched = int(np.count_nonzero(sides))
+            key = (tuple(sides), pats.tobytes(), tuple(np.round(L, 9)))
+            if key in seen:
+                continue
+            seen.add(key)
+            if n_arched > max_units:
+                tried.append(dict(slots=N, share=share, error=f"{n_arched} arched units > "
+                                                                f"max_units = {max_units}"))
+                continue
+            tick("layouts")
+            frames = [(float(tg.start[0]), float(tg.start[1]), tg.start_angle) for tg in tgts]
+            fit, v, nfev, changes = _fit_layout(dm, t, w, sides, L, hL, pats, frames, tgts, lim,
+                                                placement, tol)
+            # the arc-length-matched distances bound the deviation from above: measure the
+            # deviation itself only for a layout that may be within reach
+            matched = float(np.max(np.hypot(*fit.residuals(v).reshape(-1, 2).T)))
+            if matched <= 2.5 * tol:
+                devs, places, _ = _assess(fit, v, quick=True)
+                worst = max(d[placement][0] for d in devs)
+            else:
+                worst = matched
+            tried.append(dict(slots=N, share=share, units=fit.n, arched=n_arched,
+                              worst=worst, nfev=nfev, pattern_changes=changes))
+            if best is None or worst < best[0]:
+                best = (worst, fit, v)
+            worst_n = worst if worst_n is None else min(worst_n, worst)
+            if worst <= tol:
+                break
+        if best[0] <= tol or N >= n_hi:
+            break
+        grow = N + 1 if worst_n is None else int(math.ceil(N * math.sqrt(worst_n / tol)))
+        N = min(n_hi, max(N + 1, min(grow, N + 4)))
+    if best is None:
+        raise ValueError("no design: " + "; ".join(str(d.get("error")) for d in tried)
+                         + "; raise max_units")
+    _, fit, v = best
+    devs, places, _ = _assess(fit, v, quick=False)
+    L, hL, _ = fit.unpack(v)
+    units = _units_from(fit.m.sides, L, hL, t, w, b_over_L)
+    patterns = tuple(tuple(bool(x) for x in p) for p in fit.patterns)
+    predicted = [_placed(units, p, pl[placement], dm, state_used) for p, pl in zip(patterns, places)]
+    met = tuple(bool(d[placement][0] <= tol) for d in devs)
+    md = MultiDesign(units=units, patterns=patterns, targets=tgts, names=names,
+                     predicted=predicted, deviations=devs, placements=places,
+                     placement_mode=placement, tol=tol, met=met, t=t, w=w, state=state_used,
+                     limits=lim, history=tried)
+    md._dm = raw
+    if state_used != state:
+        md.notes.append(f"the map has no {state} state; used {state_used}")
+    if verify:
+        tick("verify")
+        verify_multi(md, nodes=nodes)
+    if not md.met_all:
+        missed = ", ".join(f"target {k + 1} ({names[k]}: {100 * d[placement][0]:.2f} %)"
+                           for k, d in enumerate(devs) if d[placement][0] > tol)
+        msg = (f"tolerance missed: the best array found deviates from {missed} > tol "
+               f"{100 * tol:.2f} % ({placement} placement); no array of these units' ranges "
+               f"was found that meets every target (tried {len(tried)} layouts, up to "
+               f"{max((d.get('arched', 0) for d in tried), default=0)} arched units)")
+        md.notes.append(msg)
+        warnings.warn(msg, UserWarning, stacklevel=2)
+    md.time = time.perf_counter() - t0
+    return md
+
+
+def _placed(units, pattern, placement, dm, state) -> np.ndarray:
+    """The base of `units` in `pattern` by `design.kinematics.chain`, placed (m)."""
+    from snapmorph.design.kinematics import chain
+    from snapmorph.design.lookup import MapLookup
+
+    x0, y0, a0 = placement
+    return chain(units, list(pattern), lookup=MapLookup(dm), start=(x0, y0), start_angle=a0,
+                 state=state).xy
+
+
+def verify_multi(md: MultiDesign, nodes: int | None = None) -> list:
+    """Simulate the whole array in each target's pattern (`design.arrays.simulate_array` on
+    one mesh, the pattern's units snapped in order, actuators removed) and measure each base
+    against its target both ways. Returns (and stores as `md.verification`) one dict per
+    target: {"status", "time", "xy" (placed as the design says), "xy_best", "deviations",
+    "placements", "max_deviation"}."""
+    from snapmorph.design.arrays import build_array, simulate_array
+
+    model = build_array(md.units, nodes=nodes)
+    out = []
+    for k, (pattern, tg) in enumerate(zip(md.patterns, md.targets)):
+        t0 = time.perf_counter()
+        r = simulate_array(md.units, snapped=list(pattern), model=model)
+        x0, y0, a0 = md.placements[k][md.placement_mode]
+        devs, places = measure(r.base, tg, start=(x0, y0), angle=a0)
+        out.append({"status": r.status, "time": time.perf_counter() - t0,
+                    "xy": place_rigid(r.base, (x0, y0), a0),
+                    "xy_best": place_rigid(r.base, places["best"][:2], places["best"][2]),
+                    "deviations": devs, "placements": places,
+                    "max_deviation": devs[md.placement_mode][0], "state": r.state})
+    md.verification = out
+    return out
