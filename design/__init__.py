@@ -5,6 +5,8 @@
     xy = forward_kinematics([u, u, u], snapped=[False, True, False])
     d = inverse_design(points_xy, t=0.5e-3, w=5e-3, tol=0.01, verify=True)   # any planar curve
     d.units, d.predicted, d.deviations, d.placement, d.met, d.verification
+    md = inverse_design_multi([C_xy, S_xy], t=0.5e-3, w=5e-3, tol=0.02)   # one array, two shapes
+    md.patterns, md.met; nearest_state(md.units, new_xy).state; md.morph_plan(0, 1)
 
 Unit shapes come from the design maps (`maps.DesignMap`) unless `source="simulate"`.
 """
@@ -18,6 +20,9 @@ from snapmorph.design.biarcs import Arc, biarc, biarcs
 from snapmorph.design.inverse import Design, inverse_design, verify_design
 from snapmorph.design.kinematics import all_states, chain, forward_kinematics, parse_state
 from snapmorph.design.lookup import MapLookup
+from snapmorph.design.multishape import MultiDesign, inverse_design_multi, verify_multi
+from snapmorph.design.nearest import NearestState, nearest_state
+from snapmorph.design.reconfigure import MorphPlan, morph_plan
 from snapmorph.design.target_io import read_target
 from snapmorph.design.targets import Target
 from snapmorph.design.units import Unit, read_units_csv, spacer, write_units_csv
@@ -27,6 +32,9 @@ __all__ = [
     "Arc",
     "Design",
     "MapLookup",
+    "MorphPlan",
+    "MultiDesign",
+    "NearestState",
     "Target",
     "Unit",
     "all_states",
@@ -35,11 +43,15 @@ __all__ = [
     "chain",
     "forward_kinematics",
     "inverse_design",
+    "inverse_design_multi",
+    "morph_plan",
+    "nearest_state",
     "parse_state",
     "read_target",
     "read_units_csv",
     "spacer",
     "tolerance",
     "verify_design",
+    "verify_multi",
     "write_units_csv",
 ]
