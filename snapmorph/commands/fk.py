@@ -22,6 +22,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--csv", default=None, help="write the base polyline (mm) of --state")
     p.add_argument("--overlay", default=None, metavar="TARGET_CSV",
                    help="draw this target (x_mm, y_mm) over the shapes, same frame")
+    p.add_argument("--nearest", default=None, metavar="TARGET",
+                   help="the state closest to this target (.csv/.svg/.dxf, mm), by branch and "
+                        "bound over the 2^n states; --plot and --csv show it")
     p.add_argument("--no-placement", action="store_true",
                    help="ignore units.csv's placement line: start at (0, 0) heading +x")
     p.add_argument("--source", choices=("map", "simulate"), default="map",
@@ -81,6 +84,11 @@ def load_units(args):
 
 def run(args) -> int:
     import math
+
+    if args.nearest:  # the state closest to a target (issue 24)
+        from snapmorph.commands.fk_nearest import run_nearest
+
+        return run_nearest(args)
 
     from snapmorph.commands._common import input_file, output_file, plot_file
 
