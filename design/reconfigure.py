@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from snapmorph.design.targets import resample, self_intersects
+from snapmorph.design.targets import resample
 
 __all__ = ["MorphPlan", "MorphStep", "morph_plan"]
 
@@ -150,8 +150,25 @@ def _face(unit, action: str) -> str:
     return own if action == "snap" else other
 
 
-def _crosses(xy) -> bool:
-    return self_intersects(resample(xy, 300))
+def _crosses(xy, n: int = 300) -> bool:
+    """True when two non-adjacent segments of the base (resampled to n points) cross properly.
+    Unlike `design.targets.self_intersects` (meant for drawn targets) it ignores orientation
+    tests within round-off of zero, so that a straight base (collinear segments) never
+    counts as crossing itself."""
+    p = resample(np.asarray(xy, dtype=float), n)
+    a, b = p[:-1], p[1:]
+    eps = 1e-9 * float(np.sum(np.hypot(*np.diff(p, axis=0).T))) ** 2
+    i, j = np.triu_indices(len(a), k=2)
+
+    def orient(o, q, r):
+        return (q[..., 0] - o[..., 0]) * (r[..., 1] - o[..., 1]) - \
+               (q[..., 1] - o[..., 1]) * (r[..., 0] - o[..., 0])
+
+    o1, o2 = orient(a[i], b[i], a[j]), orient(a[i], b[i], b[j])
+    o3, o4 = orient(a[j], b[j], a[i]), orient(a[j], b[j], b[i])
+    proper = (o1 * o2 < 0) & (o3 * o4 < 0)
+    clear = (np.abs(o1) > eps) & (np.abs(o2) > eps) & (np.abs(o3) > eps) & (np.abs(o4) > eps)
+    return bool(np.any(proper & clear))
 
 
 def morph_plan(units, start, end, *, design_map=None, placement=(0.0, 0.0, 0.0),

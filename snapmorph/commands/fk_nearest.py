@@ -48,7 +48,7 @@ def run_nearest(args) -> int:
     for mode, what in (("best", "best rigid placement"), ("clamped", "start clamped on the "
                                                                      "target's start")):
         mx, rms = r.deviations[mode]
-        print(f"  deviation, {what:<34} max {100 * mx:6.2f} % ({mx * L * 1e3:.2f} mm), "
+        print(f"  deviation, {what:<36} max {100 * mx:6.2f} % ({mx * L * 1e3:.2f} mm), "
               f"RMS {100 * rms:5.2f} %")
     print(f"  placement of unit 1's start: ({x0 * 1e3:.2f}, {y0 * 1e3:.2f}) mm, "
           f"{math.degrees(a0):.2f} deg")
