@@ -54,7 +54,8 @@ few seconds (`bench/bench_multishape.py`).
 
 Verification (`verify_multi`, `verify=True`): the whole array simulated in each pattern
 (`design.arrays.simulate_array` on one mesh, the pattern's units snapped in order, actuators
-off), its base measured against its target both ways.
+off; 81 nodes per unit, coarser if that simulation fails, see `VERIFY_NODES`), its base
+measured against its target both ways.
 """
 
 from __future__ import annotations
@@ -204,7 +205,7 @@ class MultiDesign:
                     f"{100 * d['clamped'][1]:.2f}")
             if self.verification is not None:
                 v = self.verification[k]
-                line += (f"; simulated ({v['status']}, {v['time']:.1f} s) "
+                line += (f"; simulated ({v['status']}, {v['nodes']} nodes/unit, {v['time']:.1f} s) "
                          f"{100 * v['deviations']['best'][0]:.2f} / "
                          f"{100 * v['deviations']['best'][1]:.2f} | "
                          f"{100 * v['deviations']['clamped'][0]:.2f} / "
@@ -410,13 +411,14 @@ def _slot_layout(targets, N: int, share: float, lim: Limits, dm, t, w, length: f
             owed = want
             continue
         L = float(np.clip(share * slot, lim.L_min, lim.L_max))
-        gap = max(0.0, slot - L)
-        if gap >= 2 * lim.spacer_min:
+        gap = max(0.0, slot - L)  # the unit at the slot's middle, spacers either side
+        halves = gap >= 2 * lim.spacer_min
+        if halves:
             items.append((0, gap / 2, 0.0, ()))
         hL = _hL_for_turn(dm, tau, L, t, w, lim, {})
         items.append((sgn, L, hL, A))
-        if gap >= 2 * lim.spacer_min:
-            items.append((0, gap / 2, 0.0, ()))
+        if halves or gap >= lim.spacer_min:
+            items.append((0, gap / 2 if halves else gap, 0.0, ()))
         owed = want.copy()
         owed[list(A)] -= sgn * tau
     merged = []
@@ -816,22 +818,37 @@ def _placed(units, pattern, placement, dm, state) -> np.ndarray:
                  state=state).xy
 
 
+#: mesh resolutions (nodes per unit) `verify_multi` tries in turn: the whole-array Newton
+#: iterations of `design.arrays.snap_unit` stall (step size underflow at d = 0) on long arrays
+#: meshed at the single unit's 161 nodes, e.g. a unit snapped after 400 mm of unsnapped units;
+#: 81 nodes (the map itself is built at 101) deviates from the 161-node shape by about 0.05 %
+#: of the length (`tests/design/test_multishape.py` measures it)
+VERIFY_NODES = (81, 61, 41)
+
+
 def verify_multi(md: MultiDesign, nodes: int | None = None) -> list:
     """Simulate the whole array in each target's pattern (`design.arrays.simulate_array` on
     one mesh, the pattern's units snapped in order, actuators removed) and measure each base
-    against its target both ways. Returns (and stores as `md.verification`) one dict per
-    target: {"status", "time", "xy" (placed as the design says), "xy_best", "deviations",
-    "placements", "max_deviation"}."""
+    against its target both ways. nodes: resolution per unit; None tries `VERIFY_NODES` in
+    turn until the simulation succeeds. Returns (and stores as `md.verification`) one dict
+    per target: {"status", "time", "nodes", "xy" (placed as the design says), "xy_best",
+    "deviations", "placements", "max_deviation", "state"}."""
     from snapmorph.design.arrays import build_array, simulate_array
 
-    model = build_array(md.units, nodes=nodes)
+    resolutions = VERIFY_NODES if nodes is None else (nodes,)
+    models = {}
     out = []
     for k, (pattern, tg) in enumerate(zip(md.patterns, md.targets)):
         t0 = time.perf_counter()
-        r = simulate_array(md.units, snapped=list(pattern), model=model)
+        for nd in resolutions:
+            if nd not in models:
+                models[nd] = build_array(md.units, nodes=nd)
+            r = simulate_array(md.units, snapped=list(pattern), model=models[nd])
+            if r.status == "ok":
+                break
         x0, y0, a0 = md.placements[k][md.placement_mode]
         devs, places = measure(r.base, tg, start=(x0, y0), angle=a0)
-        out.append({"status": r.status, "time": time.perf_counter() - t0,
+        out.append({"status": r.status, "time": time.perf_counter() - t0, "nodes": nd,
                     "xy": place_rigid(r.base, (x0, y0), a0),
                     "xy_best": place_rigid(r.base, places["best"][:2], places["best"][2]),
                     "deviations": devs, "placements": places,

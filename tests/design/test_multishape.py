@@ -101,8 +101,9 @@ def test_family_meets_tol_predicted_and_simulated(dm, designs, i):
     for v in md.verification:
         assert v["status"] == "ok", why
         assert v["deviations"]["best"][0] <= 0.025, why
-    assert len(set(md.target_lengths)) >= 1 and md.array_length == pytest.approx(
-        np.mean(md.target_lengths), rel=0.03)
+    # the base does not stretch: with the best placement an array can meet tol only within
+    # 2 tol of the targets' length (the straight-line limit of `_check_lengths`)
+    assert abs(md.array_length - np.mean(md.target_lengths)) <= 0.04 * np.mean(md.target_lengths)
 
 
 @pytest.mark.slow
@@ -148,6 +149,22 @@ def test_clamped_placement_starts_on_each_target(dm):
         assert (x0, y0) == pytest.approx(tuple(tgt.start), abs=1e-12)
         assert a0 == pytest.approx(tgt.start_angle, abs=1e-12)
         assert md.max_deviations[k] == md.deviations[k]["clamped"][0]
+
+
+@pytest.mark.slow
+def test_verification_mesh_is_close_to_the_single_unit_default():
+    """verify_multi meshes units at 81 nodes (`VERIFY_NODES`): against the single unit's
+    default 161 nodes the simulated base moves by less than 0.1 % of the length."""
+    from snapmorph.design import Unit
+    from snapmorph.design.arrays import simulate_array
+    from snapmorph.design.multishape import VERIFY_NODES
+
+    units = [Unit(L=0.165, h=0.0296, t=T, w=W, side=1), Unit(L=0.161, h=0.0241, t=T, w=W, side=-1),
+             Unit(L=0.176, h=0.0329, t=T, w=W, side=1)]
+    fine = simulate_array(units, snapped="101")
+    coarse = simulate_array(units, snapped="101", nodes=VERIFY_NODES[0])
+    assert fine.status == coarse.status == "ok"
+    assert deviation(coarse.base, fine.base)[0] < 1e-3
 
 
 def test_unequal_lengths_refused_with_both_lengths(dm):
