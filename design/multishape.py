@@ -28,7 +28,7 @@ Method: a discrete layout, continuous least squares, and an exact pattern search
    and right units, straight-plus-curved pieces get units snapped only where each target
    curves, a common curve one unit snapped in every target. That is 1 + 2 (2^K − 1) choices per
    slot, O(N 2^K K).
-2. **Least squares over everything continuous at once** (`_JointFit`): every unit's (L, h/L),
+2. **Least squares over everything continuous at once** (`multishape_fit._JointFit`): every unit's (L, h/L),
    every spacer's L and one placement per target, the residuals being the arc-length-matched
    distances of all K predicted states to their targets (160 pairs each), through the map's
    vectorised interpolants (`design.inverse._FastModel`, the same numbers as
@@ -37,7 +37,7 @@ Method: a discrete layout, continuous least squares, and an exact pattern search
 3. **Exact pattern re-selection** (`design.nearest.branch_and_bound`): for the fitted units,
    each target's pattern is searched over all 2ⁿ states by branch and bound in that target's
    fitted frame; if a better pattern exists, the fit (2) is repeated with it (at most
-   `PATTERN_ROUNDS` times). So the patterns are not fixed by the layout's guess.
+   `multishape_fit.PATTERN_ROUNDS` times). So the patterns are not fixed by the layout's guess.
 4. **Number of units**: N runs from the fewest slots that can hold the turning
    (ceil(Φ⁺/θ_max) + ceil(Φ⁻/θ_max) for the target that needs most) upwards,
    each N with units filling their slot and with units of 60 % of it between spacers; after a
@@ -69,13 +69,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 # Private helpers of the single-target design, used as they are (one mechanism for each job):
-# the vectorised map model, the fabrication limits, h/L for a turning, batch resampling and
-# the argument checks.
-from snapmorph.design.inverse import (_EDGE, _N_FIT, Limits, _FastModel, _StateMap, _choice,
-                                      _fraction, _hL_for_turn, _limits, _map_state_kw,
-                                      _positive, _resample_batch)
-from snapmorph.design.nearest import (branch_and_bound, matched_costs, measure, pattern_table,
-                                      _pattern_to_mask, _mask_to_pattern, _reference)
+# the map seen in one state, the fabrication limits, h/L for a turning and the argument checks.
+from snapmorph.design.inverse import (Limits, _StateMap, _choice, _fraction, _hL_for_turn,
+                                      _limits, _map_state_kw, _positive)
+from snapmorph.design.multishape_fit import _fit_layout, _JointFit
+from snapmorph.design.nearest import measure
 from snapmorph.design.targets import Target, place_rigid
 from snapmorph.design.units import Unit
 
@@ -83,8 +81,6 @@ __all__ = ["MultiDesign", "inverse_design_multi", "verify_multi"]
 
 PLACEMENTS = ("best", "clamped")
 STATES = ("released", "actuated")
-#: fit / re-select rounds per layout
-PATTERN_ROUNDS = 3
 #: the units' share of their slot in the two layouts tried per N
 SHARES = (1.0, 0.6)
 #: the shortest spacer (m) of a multi-shape design (`inverse_design` allows 1 mm): the
@@ -174,7 +170,8 @@ class MultiDesign:
             side = f"{u.side:+d}" if u.side else "0"
             th = f"{turns[i]:9.2f}" if not u.is_spacer else "        -"
             flags = " ".join(f"{'1' if p[i] else '0':>3}" for p in self.patterns)
-            lines.append(f"{i + 1:>4} {u.L * 1e3:7.1f} {u.h * 1e3:6.1f} {hl} {side:>4} {th} {flags}")
+            lines.append(f"{i + 1:>4} {u.L * 1e3:7.1f} {u.h * 1e3:6.1f} {hl} {side:>4} {th} "
+                         f"{flags}")
         return "\n".join(lines)
 
     def _turns(self):
@@ -436,232 +433,6 @@ def _slot_layout(targets, N: int, share: float, lim: Limits, dm, t, w, length: f
             pats)
 
 
-# =============================================================================================
-# 2. Least squares over every unit and every target's placement
-# =============================================================================================
-class _JointFit:
-    """Least squares over every unit's (L, h/L), every spacer's L and, for the best placement,
-    one start point and direction per target: residuals are the arc-length-matched distances
-    of each target's predicted state (its pattern's units snapped) to the target, all targets
-    at once. Jacobians by forward differences; every perturbed unit looked up in one call."""
-
-    def __init__(self, model: _FastModel, patterns, targets, lim: Limits, placement: str):
-        self.m, self.lim, self.placement = model, lim, placement
-        self.patterns = np.asarray(patterns, dtype=bool)
-        self.targets = targets
-        self.K = len(targets)
-        self.n = len(model.sides)
-        self.u = np.linspace(0.0, 1.0, _N_FIT)
-        self.refs = []
-        for tg in targets:
-            p = tg.at_fraction(self.u)
-            self.refs.append(p[:, 0] + 1j * p[:, 1])
-        self.Lref = float(np.mean([tg.length for tg in targets]))
-        self.lin = np.linspace(0.0, 1.0, model.M)
-        self.index = []
-        for i in range(self.n):
-            self.index.append((i, "L"))
-            if model.sides[i] != 0:
-                self.index.append((i, "hL"))
-        if placement == "best":
-            for k in range(self.K):
-                self.index += [(-1 - k, "x"), (-1 - k, "y"), (-1 - k, "a")]
-
-    # --- parameters -----------------------------------------------------------------------
-    def pack(self, L, hL, frames):
-        v = []
-        for i, what in self.index:
-            if i >= 0:
-                v.append(L[i] / self.Lref if what == "L" else hL[i])
-            else:
-                x0, y0, a0 = frames[-1 - i]
-                v.append({"x": x0 / self.Lref, "y": y0 / self.Lref, "a": a0}[what])
-        return np.array(v)
-
-    def unpack(self, v):
-        L, hL = np.zeros(self.n), np.zeros(self.n)
-        frames = [[float(tg.start[0]), float(tg.start[1]), tg.start_angle] for tg in self.targets]
-        for (i, what), x in zip(self.index, v):
-            if i >= 0:
-                if what == "L":
-                    L[i] = x * self.Lref
-                else:
-                    hL[i] = x
-            else:
-                j = "xya".index(what)
-                frames[-1 - i][j] = x * self.Lref if j < 2 else x
-        return L, hL, [tuple(f) for f in frames]
-
-    def bounds(self):
-        lo, hi, lim = [], [], self.lim
-        for i, what in self.index:
-            if i < 0:
-                lo.append(-np.inf)
-                hi.append(np.inf)
-            elif what == "hL":
-                lo.append(lim.hL_min * (1 + _EDGE))
-                hi.append(lim.hL_max * (1 - _EDGE))
-            elif self.m.sides[i] != 0:
-                # a hair inside the limits: units.csv rounds to mm (as design.inverse)
-                lo.append(lim.L_min * (1 + _EDGE) / self.Lref)
-                hi.append(lim.L_max * (1 - _EDGE) / self.Lref)
-            else:
-                lo.append(lim.spacer_min / self.Lref)
-                hi.append(2.0)
-        return np.array(lo), np.array(hi)
-
-    # --- shapes and residuals -------------------------------------------------------------
-    def shapes(self, L, hL):
-        """(snapped shapes (n, M) complex m, end turns (n,) rad, straight shapes (n, M)); the
-        last answer is kept (least squares asks for the residuals and then the Jacobian at the
-        same point)."""
-        key = (L.tobytes(), hL.tobytes())
-        if getattr(self, "_last", (None,))[0] != key:
-            zs, ts = self.m.unit_frames(np.arange(self.n), L, hL)
-            self._last = (key, (zs, ts, L[:, None] * self.lin[None, :]))
-        return self._last[1]
-
-    def chains(self, zs, ts, zf, k, starts, angles):
-        """Target k's state placed from starts (B,) complex heading angles (B,): (B, K') complex."""
-        pat = self.patterns[k]
-        Z = np.where(pat[None, :, None], zs, zf)
-        T = np.where(pat[None, :], ts, 0.0)
-        return self.m.assemble(Z, T, starts, angles)
-
-    def _res(self, k, poly):
-        p = _resample_batch(poly, self.u)
-        d = (p - self.refs[k][None]) / self.Lref
-        r = np.stack([d.real, d.imag], axis=-1).reshape(len(poly), -1)
-        return np.where(np.isfinite(r), r, 1.0)
-
-    def residuals(self, v):
-        L, hL, frames = self.unpack(v)
-        zs, ts, zf = self.shapes(L, hL)
-        out = []
-        for k, (x0, y0, a0) in enumerate(frames):
-            poly = self.chains(zs[None], ts[None], zf[None], k, np.array([x0 + 1j * y0]),
-                               np.array([a0]))
-            out.append(self._res(k, poly)[0])
-        return np.concatenate(out)
-
-    def jac(self, v):
-        lo, hi = self.bounds()
-        step = 1e-6 * np.maximum(1.0, np.abs(v))
-        h = np.where(v + step > hi, -1.0, 1.0) * step
-        L, hL, frames = self.unpack(v)
-        zs0, ts0, zf0 = self.shapes(L, hL)
-        P = len(v)
-        Zs = np.repeat(zs0[None], P + 1, axis=0)
-        Ts = np.repeat(ts0[None], P + 1, axis=0)
-        Zf = np.repeat(zf0[None], P + 1, axis=0)
-        S = np.array([[f[0] + 1j * f[1] for f in frames]] * (P + 1))
-        A = np.array([[f[2] for f in frames]] * (P + 1))
-        units, Ls, hLs, rows = [], [], [], []
-        for r, (i, what) in enumerate(self.index, start=1):
-            if i < 0:
-                k = -1 - i
-                if what == "x":
-                    S[r, k] += h[r - 1] * self.Lref
-                elif what == "y":
-                    S[r, k] += 1j * h[r - 1] * self.Lref
-                else:
-                    A[r, k] += h[r - 1]
-                continue
-            Li = L[i] + (h[r - 1] * self.Lref if what == "L" else 0.0)
-            hLi = hL[i] + (h[r - 1] if what == "hL" else 0.0)
-            units.append(i)
-            Ls.append(Li)
-            hLs.append(hLi)
-            rows.append(r)
-        if units:
-            zp, tp = self.m.unit_frames(np.array(units), np.array(Ls), np.array(hLs))
-            Zs[rows, units] = zp
-            Ts[rows, units] = tp
-            Zf[rows, units] = np.array(Ls)[:, None] * self.lin[None, :]
-        blocks = []
-        for k in range(self.K):
-            R = self._res(k, self.chains(Zs, Ts, Zf, k, S[:, k], A[:, k]))
-            blocks.append(((R[1:] - R[0]) / h[:, None]).T)
-        return np.vstack(blocks)
-
-    def solve(self, v0, weights=None, max_nfev=25):
-        from scipy.optimize import least_squares
-
-        lo, hi = self.bounds()
-        v0 = np.clip(v0, lo + 1e-12, hi - 1e-12)
-        if weights is None:
-            fun, jac = self.residuals, self.jac
-        else:
-            fun = lambda v: weights * self.residuals(v)  # noqa: E731
-            jac = lambda v: weights[:, None] * self.jac(v)  # noqa: E731
-        sol = least_squares(fun, v0, jac=jac, bounds=(lo, hi), x_scale="jac", xtol=1e-7,
-                            ftol=1e-6, gtol=1e-8, max_nfev=max_nfev, method="trf")
-        return sol.x, int(sol.nfev)
-
-    def solve_minimax(self, v0, tol):
-        """Least squares, then up to three Lawson re-weightings towards the largest distance
-        of any target, unless every matched distance is already within tol / 2."""
-        v, nfev = self.solve(v0)
-        weights = np.ones(len(self.residuals(v)))
-        for _ in range(3):
-            d = np.hypot(*self.residuals(v).reshape(-1, 2).T)
-            if not np.all(np.isfinite(d)) or d.max() <= 0.5 * tol:
-                break
-            weights = weights * np.repeat(np.maximum(d / d.max(), 0.05), 2)
-            weights = weights / np.sqrt(np.mean(weights ** 2))
-            v2, n2 = self.solve(v, weights=np.sqrt(weights), max_nfev=20)
-            nfev += n2
-            if np.max(np.hypot(*self.residuals(v2).reshape(-1, 2).T)) < d.max():
-                v = v2
-        return v, nfev
-
-
-# =============================================================================================
-# 3. Exact pattern re-selection
-# =============================================================================================
-def _reselect(fit: _JointFit, v) -> tuple[np.ndarray, list]:
-    """Each target's best pattern for the fitted units (branch and bound in the target's
-    fitted frame, the current pattern as the incumbent): (patterns (K, n), per target (old c,
-    new c, nodes))."""
-    L, hL, frames = fit.unpack(v)
-    zs, ts, _ = fit.shapes(L, hL)
-    arched = fit.m.sides != 0
-    table = pattern_table(zs, L, arched, ts)
-    new = fit.patterns.copy()
-    info = []
-    for k, tg in enumerate(fit.targets):
-        Q, Qj = _reference(table, tg, frames[k])
-        cur = _pattern_to_mask(fit.patterns[k])
-        c_cur = float(matched_costs(table, Q, [cur])[0])
-        found, nodes, _ = branch_and_bound(table, Q, Qj, top=1, seeds=[cur])
-        c_new, mask = found[0]
-        if mask != cur and c_new < 0.98 * c_cur:
-            new[k] = _mask_to_pattern(mask, fit.n)
-        info.append((c_cur, c_new, nodes))
-    return new, info
-
-
-# =============================================================================================
-# The design
-# =============================================================================================
-def _fit_layout(dm, t, w, sides, L, hL, pats, frames, tgts, lim, placement, tol):
-    """Fit a layout (step 2), re-select its patterns (step 3) and fit again while they change.
-    Returns (fit, v, evaluations, pattern entries changed)."""
-    nfev, changes = 0, 0
-    model = _FastModel(dm, t, w, sides, {})
-    fit = _JointFit(model, pats, tgts, lim, placement)
-    v = fit.pack(L, hL, frames)
-    for _ in range(PATTERN_ROUNDS):
-        v, n_ev = fit.solve_minimax(v, tol)
-        nfev += n_ev
-        new, _info = _reselect(fit, v)
-        if np.array_equal(new, fit.patterns):
-            break
-        changes += int(np.count_nonzero(new != fit.patterns))
-        fit = _JointFit(model, new, tgts, lim, placement)
-    return fit, v, nfev, changes
-
-
 def _units_from(sides, L, hL, t, w, b_over_L) -> list:
     return [Unit(L=float(Li), h=0.0, t=t, w=w, side=0) if sd == 0 else
             Unit(L=float(Li), h=float(hi * Li), t=t, w=w, side=int(sd), b=b_over_L * float(Li))
@@ -718,7 +489,8 @@ def inverse_design_multi(targets, t: float, w: float, *, tol: float = 0.02,
     try:
         min_barrier = float(min_barrier)
     except (TypeError, ValueError):
-        raise ValueError(f"min_barrier must be a number (E I_arch / L), got {min_barrier!r}") from None
+        raise ValueError(f"min_barrier must be a number (E I_arch / L), got "
+                         f"{min_barrier!r}") from None
     if not (math.isfinite(min_barrier) and min_barrier >= 0):
         raise ValueError(f"min_barrier must be >= 0 (E I_arch / L), got {min_barrier!r}")
     if progress is not None and not callable(progress):
@@ -783,7 +555,8 @@ def inverse_design_multi(targets, t: float, w: float, *, tol: float = 0.02,
     L, hL, _ = fit.unpack(v)
     units = _units_from(fit.m.sides, L, hL, t, w, b_over_L)
     patterns = tuple(tuple(bool(x) for x in p) for p in fit.patterns)
-    predicted = [_placed(units, p, pl[placement], dm, state_used) for p, pl in zip(patterns, places)]
+    predicted = [_placed(units, p, pl[placement], dm, state_used)
+                 for p, pl in zip(patterns, places)]
     met = tuple(bool(d[placement][0] <= tol) for d in devs)
     md = MultiDesign(units=units, patterns=patterns, targets=tgts, names=names,
                      predicted=predicted, deviations=devs, placements=places,

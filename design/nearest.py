@@ -320,8 +320,8 @@ class NearestState:
     deviation: (max, rms) with `placement_mode`; deviations/placements: both ways;
     predicted: the base polyline placed as `placement` says; matched: c of the pattern (its
     largest arc-length-matched distance, m) with that placement; candidates: [(state, largest
-    matched distance after a least-squares rigid fit, fraction of the length)] ranked; nodes: tree nodes expanded in all rounds; exact: no
-    round was stopped by max_nodes."""
+    matched distance after a least-squares rigid fit, fraction of the length)] ranked; nodes:
+    tree nodes expanded in all rounds; exact: no round was stopped by max_nodes."""
 
     units: list
     pattern: tuple

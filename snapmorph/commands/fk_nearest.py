@@ -63,5 +63,6 @@ def run_nearest(args) -> int:
     if args.plot:
         from snapmorph.design.multishape_plots import plot_nearest
 
-        print(f"wrote {plot_nearest(r, args.plot, title=f'{args.units}: nearest state to {args.nearest}')}")
+        title = f"{args.units}: nearest state to {args.nearest}"
+        print(f"wrote {plot_nearest(r, args.plot, title=title)}")
     return 0
