@@ -71,6 +71,15 @@ def bench_nearest(dm, n, seed):
           f"wall, {statistics.median(cpu):.3f} s CPU (target <= 1 s); {r.nodes} tree nodes, "
           f"found the state: {r.pattern == tuple(state)}, deviation "
           f"{100 * r.deviation[0]:.3f} %")
+    # a target that is no state of the array: a smooth curve through four points, same length
+    length = sum(u.L for u in units)
+    pts = np.array([[0.0, 0.0], [0.3, 0.15], [0.6, -0.1], [1.0, 0.2]])
+    other = Target.from_points(pts * length / Target.from_points(pts).length)
+    t0, c0 = time.perf_counter(), time.process_time()
+    r = nearest_state(units, other, design_map=dm)
+    print(f"  a target that is no state of it (a smooth curve, same length): "
+          f"{time.perf_counter() - t0:.3f} s wall, {time.process_time() - c0:.3f} s CPU, "
+          f"{r.nodes} tree nodes, deviation {100 * r.deviation[0]:.2f} %")
 
 
 def main():

@@ -166,12 +166,13 @@ def push_direction(xy_unit: np.ndarray, side: int, action: str) -> tuple:
     return p, towards
 
 
-def _draw_plan_row(axes, plan, lo, hi):
+def _draw_plan_row(axes, plan, lo, hi, first: int = 0, prefix: str = ""):
+    """Shapes first, first + 1, ... of a plan on the given axes (one per axis)."""
     shapes = plan.shapes
     flags = [plan.start] + [tuple(c == "1" for c in s.state) for s in plan.steps]
     pad = 0.06 * float(np.max(hi - lo))
     arrow = 0.12 * float(np.max(hi - lo))
-    for j, ax in enumerate(axes):
+    for ax, j in zip(axes, range(first, first + len(axes))):
         if j >= len(shapes):
             ax.axis("off")
             continue
@@ -185,7 +186,7 @@ def _draw_plan_row(axes, plan, lo, hi):
                         arrowprops=dict(arrowstyle="-|>", color="C3", lw=1.4))
             ax.text(*tail, f"{step.unit + 1}", color="C3", fontsize=7, ha="center",
                     va="center")
-        label = "start " if j == 0 else f"after step {j}: "
+        label = f"{prefix}start " if j == 0 else f"after step {j}: "
         crossing = j > 0 and plan.steps[j - 1].crossing
         ax.set_title(f"{label}{plan.states[j]}" + (" CROSSES" if crossing else ""), fontsize=7)
         ax.set_xlim(lo[0] - pad, hi[0] + pad)
@@ -213,18 +214,19 @@ def plot_morph_plan(plan, path, title: str | None = None, ncols: int = 5) -> Pat
     return _save(fig, path)
 
 
-def plot_morph_plans(md, path) -> Path:
-    """The plans T1 -> T2 -> ... of a `MultiDesign`, one row each, in the first target's
-    placement."""
+def plot_morph_plans(md, path, ncols: int = 6) -> Path:
+    """The plans T1 -> T2 -> ... of a `MultiDesign`, each in rows of at most `ncols` shapes,
+    each in its first target's placement."""
     plt = _plt()
     plans = [md.morph_plan(k, k + 1) for k in range(len(md.targets) - 1)]
-    ncols = max(len(p.shapes) for p in plans)
+    rows = [(k, first) for k, p in enumerate(plans) for first in range(0, len(p.shapes), ncols)]
+    ncols = min(ncols, max(len(p.shapes) for p in plans))
     allp = np.vstack([np.vstack(p.shapes) for p in plans]) * 1e3
     lo, hi = allp.min(axis=0), allp.max(axis=0)
-    fig, axes = plt.subplots(len(plans), ncols, figsize=(2.5 * ncols, 2.5 * len(plans) + 0.6),
+    fig, axes = plt.subplots(len(rows), ncols, figsize=(2.6 * ncols, 2.5 * len(rows) + 0.6),
                              squeeze=False, constrained_layout=True)
-    for row, plan in zip(axes, plans):
-        _draw_plan_row(list(row), plan, lo, hi)
+    for row, (k, first) in zip(axes, rows):
+        _draw_plan_row(list(row), plans[k], lo, hi, first=first, prefix=f"T{k + 1} -> T{k + 2}: ")
     text = "; ".join(f"T{k + 1} -> T{k + 2}: {len(p.steps)} steps" for k, p in enumerate(plans))
     fig.suptitle(f"reconfiguration ({text}); arrow: the next press, towards the base (snap from "
                  "the arch's face, push back from the other)", fontsize=9)

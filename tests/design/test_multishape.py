@@ -186,7 +186,7 @@ def test_unequal_lengths_refused_with_both_lengths(dm):
 
 
 @pytest.mark.slow
-def test_a_set_no_array_can_hold_is_reported_not_met(dm):
+def test_a_set_no_array_can_hold_is_reported_not_met(dm, tmp_path):
     """A half circle left and its mirror image, 150 mm long. Why no array meets them: a unit
     turns one way by at most θ_max, so the array needs ceil(180° / θ_max) left-turning units
     and as many right-turning ones, each at least L_min long — more than 150 mm of units. The
@@ -201,6 +201,11 @@ def test_a_set_no_array_can_hold_is_reported_not_met(dm):
     assert not md.met_all and any(d > 0.02 for d in md.max_deviations)
     assert "TOLERANCE MISSED" in md.summary()
     assert any("tolerance missed" in n for n in md.notes)
+    md.write(tmp_path, drawings=False)
+    assert "# TOLERANCE MISSED" in (tmp_path / "units.csv").read_text()
+    assert len(read_units_csv(tmp_path / "units.csv")) == len(md.units)
+    rows = (tmp_path / "patterns.csv").read_text().splitlines()[1:]
+    assert [r.endswith("yes") for r in rows] == list(md.met)
 
 
 @pytest.mark.parametrize("targets, word", [
