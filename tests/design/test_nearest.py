@@ -98,7 +98,10 @@ def test_nearest_state_finds_the_state_a_target_was_made_from(dm, n, seed):
     fk = chain(units, list(r.pattern), lookup=lookup, start=(x0, y0), start_angle=a0).xy
     assert np.allclose(fk, r.predicted, atol=1e-12)
     assert deviation(fk, target.xy)[0] == pytest.approx(r.deviation[0], rel=1e-9)
-    assert r.exact and r.nodes < 2 ** (sum(not u.is_spacer for u in units) + 1)
+    # the searches prune: together they expand fewer nodes than one full tree (2^(n + 1) - 1
+    # nodes), and a small part of it at 20 units
+    tree = 2 ** (sum(not u.is_spacer for u in units) + 1)
+    assert r.exact and r.nodes < (tree if n < 20 else 0.05 * tree), r.nodes
 
 
 def test_clamped_placement_and_file_targets(dm, tmp_path):
