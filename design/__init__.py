@@ -5,6 +5,8 @@
     xy = forward_kinematics([u, u, u], snapped=[False, True, False])
     d = inverse_design(points_xy, t=0.5e-3, w=5e-3, tol=0.01, verify=True)   # any planar curve
     d.units, d.predicted, d.deviations, d.placement, d.met, d.verification
+    md = inverse_design_multi([C_xy, S_xy], t=0.5e-3, w=5e-3, tol=0.02)   # one array, two shapes
+    md.patterns, md.met; nearest_state(md.units, new_xy).state; md.morph_plan(0, 1)
 
 Unit shapes come from the design maps (`maps.DesignMap`) unless `source="simulate"`.
 """
@@ -24,6 +26,9 @@ from snapmorph.design.verification import verify_design
 from snapmorph.design.kinematics import (all_snap_patterns, all_states, chain, forward_kinematics,
                                          parse_snapped, parse_state)
 from snapmorph.design.lookup import MapLookup
+from snapmorph.design.multishape import MultiDesign, inverse_design_multi, verify_multi
+from snapmorph.design.nearest import NearestState, nearest_state
+from snapmorph.design.reconfigure import MorphPlan, morph_plan
 from snapmorph.design.target_io import read_target
 from snapmorph.design.targets import Target
 from snapmorph.design.units import Unit, read_units_csv, spacer, write_units_csv
@@ -47,6 +52,9 @@ __all__ = [
     "Arc",
     "Design",
     "MapLookup",
+    "MorphPlan",
+    "MultiDesign",
+    "NearestState",
     "Target",
     "Unit",
     "all_snap_patterns",
@@ -57,11 +65,15 @@ __all__ = [
     "forward_kinematics",
     "inverse_design",
     "parse_snapped",
+    "inverse_design_multi",
+    "morph_plan",
+    "nearest_state",
     "parse_state",
     "read_target",
     "read_units_csv",
     "spacer",
     "tolerance",
     "verify_design",
+    "verify_multi",
     "write_units_csv",
 ]

@@ -22,14 +22,14 @@ from snapmorph.design.units import Unit
 from snapmorph.design.verification import assess
 
 #: correspondence points of the least-squares residual (each gives an x and a y residual)
-_N_FIT = 160
+N_FIT = 160
 #: spacers shorter than this (m) are dropped from an initial layout (they are glue joints)
 _MIN_SPACER = 1e-3
 #: relative margin kept from the fabrication limits (see `_Fit.bounds`)
-_EDGE = 1e-5
+EDGE = 1e-5
 
 
-def _resample_batch(z: np.ndarray, u: np.ndarray) -> np.ndarray:
+def resample_batch(z: np.ndarray, u: np.ndarray) -> np.ndarray:
     """(B, K) complex polylines sampled at arc-length fractions u: (B, len(u)) complex."""
     seg = np.abs(np.diff(z, axis=1))
     s = np.concatenate([np.zeros((z.shape[0], 1)), np.cumsum(seg, axis=1)], axis=1)
@@ -54,7 +54,7 @@ class Limits:
     spacer_min: float = _MIN_SPACER
 
 
-def _limits(dm, t, w, L_range, hL_range, min_barrier, state_kw) -> Limits:
+def fabrication_limits(dm, t, w, L_range, hL_range, min_barrier, state_kw) -> Limits:
     """Fabrication bounds from the user's ranges, intersected with what the map covers: t/L and
     w/L inside the map, h/L where every unit of the L range is bistable with an energy barrier
     of at least `min_barrier` (E I_arch / L units)."""
@@ -126,7 +126,7 @@ def _increasing_pair(name, value, what, order) -> tuple[float, float]:
     return a, b
 
 
-def _hL_for_turn(dm, turn_deg, L, t, w, lim: Limits, state_kw, scale=1.0) -> float:
+def hL_for_turn(dm, turn_deg, L, t, w, lim: Limits, state_kw, scale=1.0) -> float:
     """h/L of the unit of length L turning by |turn_deg| × scale (deg), clamped to the limits."""
     want = float(np.clip(abs(turn_deg) * scale, lim.theta_min, lim.theta_max))
     hs = np.linspace(lim.hL_min, lim.hL_max, 200)
@@ -202,7 +202,7 @@ def _initial_layout(target: Target, quantum_deg: float, lim: Limits, dm, t, w, s
             left = max(0.0, min(centre - L / 2 - a, length - L))
             right = max(0.0, length - L - left)
             spacer(left)
-            hL = _hL_for_turn(dm, abs(Phi) / n, L, t, w, lim, state_kw, theta_scale)
+            hL = hL_for_turn(dm, abs(Phi) / n, L, t, w, lim, state_kw, theta_scale)
             items.append((side, L, hL))
             spacer(right)
     # merge neighbouring spacers; drop slivers
@@ -227,7 +227,7 @@ class _Fit:
 
     def __init__(self, model: FastModel, target: Target, lim: Limits, placement: str):
         self.m, self.target, self.lim, self.placement = model, target, lim, placement
-        self.u = np.linspace(0.0, 1.0, _N_FIT)
+        self.u = np.linspace(0.0, 1.0, N_FIT)
         self.ref = target.at_fraction(self.u)
         self.ref_c = self.ref[:, 0] + 1j * self.ref[:, 1]
         self.n = len(model.sides)
@@ -249,8 +249,8 @@ class _Fit:
             if self.m.sides[i] != 0:
                 # a hair inside the limits: a unit on the map's edge must stay inside it after
                 # units.csv rounds it to mm
-                lo += [self.lim.L_min * (1 + _EDGE) / self.Lref, self.lim.hL_min * (1 + _EDGE)]
-                hi += [self.lim.L_max * (1 - _EDGE) / self.Lref, self.lim.hL_max * (1 - _EDGE)]
+                lo += [self.lim.L_min * (1 + EDGE) / self.Lref, self.lim.hL_min * (1 + EDGE)]
+                hi += [self.lim.L_max * (1 - EDGE) / self.Lref, self.lim.hL_max * (1 - EDGE)]
             else:
                 lo.append(self.lim.spacer_min / self.Lref)
                 hi.append(2.0)
@@ -291,7 +291,7 @@ class _Fit:
         return out
 
     def _residual(self, z):
-        p = _resample_batch(z, self.u)
+        p = resample_batch(z, self.u)
         d = (p - self.ref_c[None]) / self.Lref
         r = np.stack([d.real, d.imag], axis=-1).reshape(len(z), -1)
         return np.where(np.isfinite(r), r, 1.0)
@@ -390,7 +390,7 @@ def curve_design(target: Target, t, w, dm, tol, placement, L_range, hL_range, mi
 
     t0 = time.perf_counter()
     state_kw, state_used = {}, state  # dm is a StateMap: it adds the state itself
-    lim = _limits(dm, t, w, L_range, hL_range, min_barrier, state_kw)
+    lim = fabrication_limits(dm, t, w, L_range, hL_range, min_barrier, state_kw)
     b_over_L = lookup.b_over_L
     fractions = (0.95, 0.8, 0.65, 0.5, 0.4, 0.3, 0.22)
     quanta = sorted({round(max(lim.theta_min, f * lim.theta_max), 6) for f in fractions}

@@ -81,11 +81,11 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     """
     import warnings
 
-    t, w = _positive("t", t), _positive("w", w)
-    tol = _fraction("tol", tol)
-    placement = _choice("placement", placement, PLACEMENTS)
-    theta_convention = _choice("theta_convention", theta_convention, THETA_CONVENTIONS)
-    state = _choice("state", state, STATES)
+    t, w = check_positive("t", t), check_positive("w", w)
+    tol = check_fraction("tol", tol)
+    placement = check_choice("placement", placement, PLACEMENTS)
+    theta_convention = check_choice("theta_convention", theta_convention, THETA_CONVENTIONS)
+    state = check_choice("state", state, STATES)
     if isinstance(max_units, bool) or not isinstance(max_units, (int, np.integer)) or max_units < 1:
         raise ValueError(f"max_units must be an integer >= 1, got {max_units!r}")
     try:
@@ -195,7 +195,7 @@ def _default_dm():
     return default_map()
 
 
-def _fraction(name, value) -> float:
+def check_fraction(name, value) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -248,14 +248,14 @@ def _controls_x(value) -> np.ndarray:
     return arr
 
 
-def _choice(name, value, allowed):
+def check_choice(name, value, allowed):
     if value not in allowed:
         raise ValueError(f"{name} must be one of {', '.join(repr(a) for a in allowed)}, got "
                          f"{value!r}")
     return value
 
 
-def _positive(name, value) -> float:
+def check_positive(name, value) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):

@@ -21,14 +21,15 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                "an SVG file (the first <path>'s d: lines, arcs, Béziers; units mm, y up as seen); "
                "or a DXF file (the first polyline, mm). Exit status 1 when --tol is missed.",
     )
-    p.add_argument("target", help="target file: .csv, .svg or .dxf (mm)")
+    p.add_argument("target", nargs="+", help="target file: .csv, .svg or .dxf (mm); two or more: "
+                   "one array with one snap pattern per target (issue 24)")
     p.add_argument("--t", type=float, required=True, help="sheet thickness (mm)")
     p.add_argument("--w", type=float, required=True, help="strip width (mm)")
     p.add_argument("--out", default="build/design", help="output directory (default %(default)s)")
     p.add_argument("--map", default=None, help="design map netCDF (default: the committed map)")
-    p.add_argument("--tol", type=float, default=0.01,
+    p.add_argument("--tol", type=float, default=None,
                    help="largest deviation allowed, a fraction of the target's length "
-                        "(default %(default)s = 1 %%)")
+                        "(default 0.01 = 1 %%; 0.02 with several targets)")
     p.add_argument("--placement", choices=("best", "clamped"), default="best",
                    help="the deviation --tol applies to: after the best rigid placement, or with "
                         "unit 1's start clamped on the target's start and tangent "
@@ -94,6 +95,8 @@ def run(args) -> int:
 
     from snapmorph.cli import CommandError
 
+    if args.tol is None:
+        args.tol = 0.02 if len(args.target) > 1 else 0.01
     for name, what in (("t", "sheet thickness"), ("w", "strip width")):
         value = getattr(args, name)
         if not (value > 0 and math.isfinite(value)):
@@ -117,6 +120,11 @@ def run(args) -> int:
         except ValueError:
             raise CommandError(f"--controls must be comma-separated numbers (mm), "
                                f"got {args.controls!r}") from None
+    if len(args.target) > 1:  # one array, several shapes (issue 24)
+        from snapmorph.commands.design_multi import run_multi
+
+        return run_multi(args, L_range=L_range, hL_range=hL_range, colours=colours)
+    args.target = args.target[0]
     if not Path(args.target).is_file():
         raise CommandError(f"target file not found: {args.target}")
     if args.map is not None and not Path(args.map).is_file():

@@ -23,6 +23,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                       csv="write the base polyline (mm) of --snapped",
                       overlay="draw this target (x_mm, y_mm) over the shapes, same frame",
                       start="start at (0, 0) heading +x")
+    p.add_argument("--nearest", default=None, metavar="TARGET",
+                   help="the snap pattern closest to this target (.csv/.svg/.dxf, mm), by branch "
+                        "and bound over the 2^n patterns; --plot and --csv show it")
     p.add_argument("--source", choices=("map", "simulate"), default="map",
                    help="unit shapes from the design map or a direct simulation "
                         "(default %(default)s)")
@@ -81,6 +84,11 @@ def load_units(args):
 
 def run(args) -> int:
     import math
+
+    if args.nearest:  # the snap pattern closest to a target (issue 24)
+        from snapmorph.commands.fk_nearest import run_nearest
+
+        return run_nearest(args)
 
     from snapmorph.commands._common import input_file, output_file, plot_file, typed_name
 
