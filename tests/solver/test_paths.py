@@ -502,7 +502,7 @@ def test_path_repr_is_short():
 
 def _work_gaps(path, structure):
     """Energy balance of each step of a displacement-controlled path (see
-    `solver.continuation._work_mismatch`): |dE - 0.5 (F_k + F_k+1) dd| / (|dE| + fscale dd)."""
+    `solver.displacement._work_mismatch`): |dE - 0.5 (F_k + F_k+1) dd| / (|dE| + fscale dd)."""
     fscale = structure.scales()[1]
     dd, dE = np.diff(path.displacement), np.diff(path.energy)
     work = 0.5 * (path.force[1:] + path.force[:-1]) * dd
@@ -510,7 +510,7 @@ def _work_gaps(path, structure):
 
 
 def test_work_mismatch_is_zero_on_a_quadratic_energy_and_flags_a_jump():
-    from snapmorph.solver.continuation import _work_mismatch
+    from snapmorph.solver.displacement import _work_mismatch
 
     # E = k d^2 / 2, F = k d: the trapezoid is exact
     k, d0, d1 = 3.0e3, 1e-3, 1.5e-3
@@ -526,7 +526,7 @@ def test_work_mismatch_is_zero_on_a_quadratic_energy_and_flags_a_jump():
 def test_a_step_that_gains_energy_however_small_ends_with_a_status_that_says_so(monkeypatch):
     # Were every step to gain energy beyond the work of the push (as the jump to a far
     # equilibrium did on the 401-node arch), the path must stop with a status saying so.
-    import snapmorph.solver.continuation as cont
+    import snapmorph.solver.displacement as cont
 
     monkeypatch.setattr(cont, "_work_mismatch", lambda *a: (1.0, False))
     st, mid, h, EI = arch(10, 101, "fix", centre=False)

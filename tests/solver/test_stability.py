@@ -280,7 +280,7 @@ def test_refine_maximum_finds_the_vertex_and_refuses_a_branch_jump():
     solve of the search had converged on another equilibrium and its force was taken as
     the maximum. A solve far off the samples' line now abandons the search (the callers fall
     back to the samples' parabola)."""
-    from snapmorph.solver.continuation import ConvergenceError
+    from snapmorph.solver.problem import ConvergenceError
     from snapmorph.solver.states import refine_maximum
 
     d = np.array([0.0, 0.2, 0.4, 0.6])

@@ -9,7 +9,7 @@ import pytest
 
 from snapmorph.solver import Structure3D
 from snapmorph.solver.banded import band_to_dense
-from snapmorph.solver.continuation import equilibrium
+from snapmorph.solver.equilibrium import equilibrium
 
 E, NU, W, T = 2.2e9, 0.38, 5e-3, 0.5e-3
 
