@@ -45,7 +45,7 @@ def element_dofs(elements, dof_map):
     return tuple(out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _gather(q, nodes, x):
     """x = the positions (x, z per node) of an element's ``nodes`` in the flat ``q``."""
     for a in range(nodes.shape[0]):
@@ -69,18 +69,21 @@ def assemble_system(q, elements, dofs, band, grad_red, grad_full):
     x4, g4, h4 = np.empty(4), np.empty(4), np.empty((4, 4))
     x6, g6, h6 = np.empty(6), np.empty(6), np.empty((6, 6))
     for e in range(stretch_nodes.shape[0]):
-        _gather(q, stretch_nodes[e], x4)
+        nodes = stretch_nodes[e]
+        _gather(q, nodes, x4)
         energy += stretch_terms(x4, stretch_params[e, 0], stretch_params[e, 1], g4, h4)
-        _scatter(stretch_nodes[e], stretch_dofs[e], 4, g4, h4, band, grad_red, grad_full)
+        _scatter(nodes, stretch_dofs[e], 4, g4, h4, band, grad_red, grad_full)
     for e in range(bend_nodes.shape[0]):
-        _gather(q, bend_nodes[e], x6)
+        nodes = bend_nodes[e]
+        _gather(q, nodes, x6)
         energy += bending_terms(x6, bend_params[e, 0], bend_params[e, 1], g6, h6)
-        _scatter(bend_nodes[e], bend_dofs[e], 6, g6, h6, band, grad_red, grad_full)
+        _scatter(nodes, bend_dofs[e], 6, g6, h6, band, grad_red, grad_full)
     for e in range(spring_nodes.shape[0]):
-        _gather(q, spring_nodes[e], x4)
+        nodes = spring_nodes[e]
+        _gather(q, nodes, x4)
         k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
         energy += spring_terms(x4, k, ox, oz, g4, h4)
-        _scatter(spring_nodes[e], spring_dofs[e], 4, g4, h4, band, grad_red, grad_full)
+        _scatter(nodes, spring_dofs[e], 4, g4, h4, band, grad_red, grad_full)
     return energy
 
 

@@ -36,8 +36,10 @@ class BandedSystem:
 
     def __init__(self, dof_map, n_reduced, bandwidth, element_dofs, dof_scale=None, order="C"):
         self.dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
-        self.dof_scale = (np.ones(self.dof_map.shape[0]) if dof_scale is None
-                          else np.asarray(dof_scale, dtype=float))
+        # (no scaling: reduced DOFs are full ones, and the per-step conversions skip it)
+        self._scaled = dof_scale is not None
+        self.dof_scale = (np.asarray(dof_scale, dtype=float) if self._scaled
+                          else np.ones(self.dof_map.shape[0]))
         # one full DOF per reduced DOF, to read reduced values off full states
         free = np.flatnonzero(self.dof_map >= 0)
         self.representative = np.empty(int(n_reduced), dtype=np.int64)
@@ -149,12 +151,15 @@ class BandedSystem:
     def reduced(self, q):
         """Reduced DOF values of the full state ``q``."""
         rep = self.representative
-        return np.asarray(q)[rep] / self.dof_scale[rep]
+        if self._scaled:
+            return np.asarray(q)[rep] / self.dof_scale[rep]
+        return np.asarray(q)[rep]
 
     def step_norm(self, q_new, q_old):
         """Size of a step between two full states in the reduced DOFs' units (m), as the
         path followers measure it."""
-        return float(np.linalg.norm((np.asarray(q_new) - q_old) / self.dof_scale))
+        step = np.asarray(q_new) - q_old
+        return float(np.linalg.norm(step / self.dof_scale if self._scaled else step))
 
     def increment(self, q, du, scale=1.0):
         """Apply a reduced increment to the full state in place (tied DOFs move together)."""
