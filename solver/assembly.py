@@ -46,9 +46,10 @@ def element_dofs(elements, dof_map):
 
 
 @njit(cache=True, inline="always")
-def _gather(q, nodes, x):
-    """x = the positions (x, z per node) of an element's ``nodes`` in the flat ``q``."""
-    for a in range(nodes.shape[0]):
+def _gather(q, nodes, k, x):
+    """x = the positions (x, z per node) of an element's first ``k`` ``nodes`` in the flat
+    ``q`` (k a constant at each call: the loop unrolls)."""
+    for a in range(k):
         x[2 * a] = q[2 * nodes[a]]
         x[2 * a + 1] = q[2 * nodes[a] + 1]
 
@@ -70,17 +71,17 @@ def assemble_system(q, elements, dofs, band, grad_red, grad_full):
     x6, g6, h6 = np.empty(6), np.empty(6), np.empty((6, 6))
     for e in range(stretch_nodes.shape[0]):
         nodes = stretch_nodes[e]
-        _gather(q, nodes, x4)
+        _gather(q, nodes, 2, x4)
         energy += stretch_terms(x4, stretch_params[e, 0], stretch_params[e, 1], g4, h4)
         _scatter(nodes, stretch_dofs[e], 4, g4, h4, band, grad_red, grad_full)
     for e in range(bend_nodes.shape[0]):
         nodes = bend_nodes[e]
-        _gather(q, nodes, x6)
+        _gather(q, nodes, 3, x6)
         energy += bending_terms(x6, bend_params[e, 0], bend_params[e, 1], g6, h6)
         _scatter(nodes, bend_dofs[e], 6, g6, h6, band, grad_red, grad_full)
     for e in range(spring_nodes.shape[0]):
         nodes = spring_nodes[e]
-        _gather(q, nodes, x4)
+        _gather(q, nodes, 2, x4)
         k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
         energy += spring_terms(x4, k, ox, oz, g4, h4)
         _scatter(nodes, spring_dofs[e], 4, g4, h4, band, grad_red, grad_full)

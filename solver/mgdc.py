@@ -198,15 +198,15 @@ class _Mgdc:
         dlam = self.sign * self.s / np.linalg.norm(uP1)
         lam_try = self.lam + dlam
         system.increment(q_try, uP1, dlam)
-        fmax = max(self.fscale, abs(lam_try) * self.unit)
+        tol_force = self.tol * max(self.fscale, abs(lam_try) * self.unit)
         du_max = du_prev = np.inf
         for it in range(1, self.max_iter + 1):
             done = settled(du_max, du_prev, tol_disp)
             fstat, r_max, du_step, dl = system.fused_mgdc(
-                q_try, lam_try, P, uP1, np.inf if done else self.tol * fmax)
+                q_try, lam_try, P, uP1, np.inf if done else tol_force)
             if fstat == 0:
                 return q_try, lam_try, counted(it, done, du_max, tol_disp, r_max,
-                                               self.tol * fmax), True
+                                               tol_force), True
             if fstat == 2:
                 du_max, du_prev = du_step, du_max
                 lam_try += dl
@@ -218,9 +218,9 @@ class _Mgdc:
             if not np.all(np.isfinite(R)) or not system.factor():
                 break
             r_max = float(np.max(np.abs(R)))
-            if r_max <= self.tol * fmax or done:
+            if r_max <= tol_force or done:
                 return q_try, lam_try, counted(it, done, du_max, tol_disp, r_max,
-                                               self.tol * fmax), True
+                                               tol_force), True
             both = system.solve(np.stack([P, -R], axis=1))
             uPj, uRj = both[:, 0], both[:, 1]
             denom = float(uP1 @ uPj)

@@ -113,14 +113,16 @@ class BandedSystem:
 
         Returns (status, residual_max, du_max): status 0 converged (K at q factorised),
         1 LDL^T failed (nothing done: use evaluate/factor/solve), 2 q updated."""
-        status, neg, r_max, du_max, energy = self._newton_kernel(q, lam, P, tol_force)
+        status, neg, r_max, du_max, energy = self._newton_iteration(
+            q, lam, P, *self._kernel_args, tol_force)
         self._after_fused(status, neg, energy)
         return status, r_max, du_max
 
     def fused_mgdc(self, q, lam, P, uP1, tol_force):
         """One fused MGDC corrector iteration; updates q. Returns (status, residual_max,
         du_max, dlam) with the statuses of `fused_newton`."""
-        status, neg, r_max, du_max, dl, energy = self._mgdc_kernel(q, lam, P, uP1, tol_force)
+        status, neg, r_max, du_max, dl, energy = self._mgdc_iteration(
+            q, lam, P, uP1, *self._kernel_args, tol_force)
         self._after_fused(status, neg, energy)
         return status, r_max, du_max, dl
 
@@ -181,6 +183,10 @@ class ReducedSystem(BandedSystem):
         self.elements = elements
         self.dofs = element_dofs(elements, dof_map)
         super().__init__(dof_map, n_reduced, bandwidth, self.dofs)
+        # the fused kernels, and their arguments after (q, lam, P[, uP1]) but the last
+        self._newton_iteration, self._mgdc_iteration = newton_iteration, mgdc_iteration
+        self._kernel_args = (self.elements, self.dofs, self.dof_map, self.band, self.heights,
+                             self.grad, self.grad_full, self._work, PIVOT_TOL)
 
     def evaluate(self, q):
         """Assemble energy (J), gradients (N) and K (N/m) at positions ``q`` (m)."""
@@ -188,16 +194,6 @@ class ReducedSystem(BandedSystem):
             q, self.elements, self.dofs, self.band, self.grad, self.grad_full
         )
         return self.energy
-
-    def _newton_kernel(self, q, lam, P, tol_force):
-        return newton_iteration(q, lam, P, self.elements, self.dofs, self.dof_map, self.band,
-                                self.heights, self.grad, self.grad_full, self._work,
-                                PIVOT_TOL, tol_force)
-
-    def _mgdc_kernel(self, q, lam, P, uP1, tol_force):
-        return mgdc_iteration(q, lam, P, uP1, self.elements, self.dofs, self.dof_map, self.band,
-                              self.heights, self.grad, self.grad_full, self._work, PIVOT_TOL,
-                              tol_force)
 
 
 class RodSystem3D(BandedSystem):
@@ -239,6 +235,10 @@ class RodSystem3D(BandedSystem):
                              self.pair_params, sf, sr, pf, pr, np.empty((n_frames, 9)),
                              np.empty((n_frames, 9, 4)), np.empty((n_frames, 9, 4, 4)))
         self._reference_twist = None
+        # the fused kernels, and their arguments after (q, lam, P[, uP1]) but the last
+        self._newton_iteration, self._mgdc_iteration = newton_iteration3d, mgdc_iteration3d
+        self._kernel_args = (self.model_arrays, self.dof_map, self.dof_scale, self.band,
+                             self.heights, self.grad, self.grad_full, self._work, PIVOT_TOL)
 
     def evaluate(self, q):
         """Assemble energy (J), gradients (N, N m) and K at the state ``q``."""
@@ -248,16 +248,6 @@ class RodSystem3D(BandedSystem):
             m[7], m[8], m[9], m[10], m[11], self.dof_scale, self.band, self.grad,
             self.grad_full, m[12], m[13], m[14], self.heights)
         return self.energy
-
-    def _newton_kernel(self, q, lam, P, tol_force):
-        return newton_iteration3d(q, lam, P, self.model_arrays, self.dof_map, self.dof_scale,
-                                  self.band, self.heights, self.grad, self.grad_full,
-                                  self._work, PIVOT_TOL, tol_force)
-
-    def _mgdc_kernel(self, q, lam, P, uP1, tol_force):
-        return mgdc_iteration3d(q, lam, P, uP1, self.model_arrays, self.dof_map, self.dof_scale,
-                                self.band, self.heights, self.grad, self.grad_full, self._work,
-                                PIVOT_TOL, tol_force)
 
     def _unit_tangents(self, q):
         """(n_edges, 3) unit tangents of the rods' edges at the state ``q``."""
