@@ -27,8 +27,7 @@ def warm_time(fn, runs=3):
 
 def main():
     from bench.cases import clamped_arch_push
-    from tests.solver.models import first_peak_index
-    from tests.solver.test_paths import arch
+    from validation.arch import arch, first_peak_index
 
     med, path = warm_time(clamped_arch_push, runs=7)
     print(f"arch benchmark (reference model, 101 nodes, h/t = 10, MGDC to 2.2 h): "

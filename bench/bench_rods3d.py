@@ -31,14 +31,10 @@ L, T, W, E, NU = 0.1, 0.5e-3, 10e-3, 2.2e9, 0.38
 
 
 def ltb_structure(n=101):
-    from snapmorph.solver import Structure3D
+    """The lateral–torsional buckling cantilever (`validation.strip3d`): (structure, rod)."""
+    from validation.strip3d import ltb_cantilever
 
-    x = np.linspace(0.0, L, n)
-    st = Structure3D()
-    rod = st.add_rod(np.stack([x, 0 * x, 0 * x], 1), width=W, thickness=T, E=E, nu=NU,
-                     normal=(0.0, 1.0, 0.0))
-    st.clamp(rod.nodes[0], toward=rod.nodes[1])
-    return st, rod
+    return ltb_cantilever(n, L, T, W)[:2]
 
 
 def ltb_push(n=101):

@@ -22,6 +22,8 @@ import time  # noqa: E402
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
+from bench.timing import median_time  # noqa: E402
+
 RUNS = int(os.environ.get("BENCH_RUNS", "9"))
 MM = 1e-3
 TABLE1 = [(9.11, 99.2, 0.50), (9.10, 99.0, 0.75), (19.24, 99.5, 0.50), (19.96, 99.7, 0.75),
@@ -57,22 +59,13 @@ def unit_case(g, label):
 
 def bifurcation_cases():
     """Paths that do meet bifurcations: what locating and switching cost."""
-    import numpy as np
-
-    from snapmorph.solver import Structure
-    from tests.solver.test_column import column
+    from validation.arch import clamped_arch
+    from validation.column import column
 
     def free_arch():
-        h, n, l = 5e-3, 101, 0.1
-        ds = l / (n - 2)
-        x = -0.5 * ds + ds * np.arange(n)
-        z = np.where((x > 0) & (x < l), 0.5 * h * (1 - np.cos(2 * np.pi * x / l)), 0.0)
-        st = Structure()
-        st.add_rod(np.stack([x, z], 1), width=5e-3, thickness=0.5e-3, E=2.2e9)
-        for node in (0, 1, n - 2, n - 1):
-            st.fix(node, "xz")
-        st.fix(n // 2, "x")
-        return st.push(n // 2, (0.0, -1.0), 2.2 * h, method="mgdc")
+        h = 5e-3
+        st, mid, _ = clamped_arch(h, centre_clamped=False)
+        return st.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
 
     cases = {
         "free-centre arch h/t=10, MGDC, follow": free_arch,
@@ -82,13 +75,7 @@ def bifurcation_cases():
             100, (-1.0, 0.0), 0.003, method="displacement"),
     }
     for label, fn in cases.items():
-        fn()
-        times, path = [], None
-        for _ in range(RUNS):
-            t0 = time.perf_counter()
-            path = fn()
-            times.append(time.perf_counter() - t0)
-        med = statistics.median(times)
+        med, _, path = median_time(fn, RUNS, warm=True)
         located = sum(c.located for c in path.bifurcations)
         print(f"{label}: median {med * 1e3:.1f} ms, {len(path)} steps, {located} bifurcation(s) "
               f"located, {path.info['branch_switches']} switch(es), "

@@ -1,6 +1,6 @@
 """Benchmark cases, importable by the benchmark driver and by tests."""
 
-from snapmorph.solver.reference_models import clamped_arch
+from validation.arch import clamped_arch
 
 
 def clamped_arch_push():

@@ -405,8 +405,8 @@ def _shape_changes(model, before, after, skip):
 class _Newton:
     """Newton on one constrained structure, assembled once (`Structure.reduced_system`): the
     prescribed displacements are whatever the starting positions hold in the fixed DOFs.
-    Converged as `solver.continuation`: residual below ``tol`` x EI/l^2 (l the model's size) or
-    a last correction below 1e-11 l."""
+    Converged as the solver's one Newton (`solver.newton.newton`): residual below ``tol`` x
+    EI/l^2 (l the model's size) or a last correction below 1e-11 l."""
 
     def __init__(self, st, tol=1e-9, max_iter=30):
         X = st.reference_positions
@@ -420,23 +420,14 @@ class _Newton:
     def solve(self, positions, max_move):
         """(positions (n, 2), iterations, negative eigenvalues); ConvergenceError on failure."""
         from snapmorph.solver import ConvergenceError
+        from snapmorph.solver.newton import newton
 
         sysm = self.system
         q = np.array(positions, dtype=float).reshape(-1)
-        du_max = np.inf
-        for it in range(self.max_iter + 1):
-            sysm.evaluate(q)
-            R = sysm.grad[: sysm.n]
-            ok = sysm.factor() and np.all(np.isfinite(R))
-            if ok and (float(np.max(np.abs(R))) <= self.tol_force or du_max <= self.tol_disp):
-                return q.reshape(-1, 2), it, sysm.negative_eigenvalues
-            if not ok or it == self.max_iter:
-                break
-            du = sysm.solve(-R)
-            if not np.all(np.isfinite(du)):
-                break
-            du_max = float(np.max(np.abs(du)))
-            sysm.increment(q, du, min(1.0, max_move / du_max) if du_max > 0 else 1.0)
+        it = newton(sysm, q, 0.0, None, self.tol_force, self.tol_disp, self.max_iter, max_move,
+                    fused=False)
+        if it >= 0:
+            return q.reshape(-1, 2), it, sysm.negative_eigenvalues
         raise ConvergenceError(f"Newton did not converge in {self.max_iter} iterations")
 
     def force(self, members, direction):

@@ -1,8 +1,23 @@
-"""Planar discrete-elastic-rods solver with MGDC path following (paper, Appendix A).
+"""Discrete-elastic-rods solver with MGDC path following (paper, Appendix A): planar and 3-D.
 
-Kernels (`energies`), assembly (`assembly`), banded linear algebra (`banded`), the
-constrained system (`system`), the model builder (`structure`) and the path followers
-(`continuation`) live apart; `unit` builds the paper's bistable unit on top.
+Layers, each importing only those below it:
+
+- kernels: `energies` / `energies3d` (+ `frames3d`), assembled by `assembly` / `assembly3d`;
+  banded LDL^T with its inertia count (`banded`, orderings in `ordering`); fused compiled
+  iterations (`iteration`);
+- systems (`system`): a constrained, assembled problem in reduced DOFs (`ReducedSystem`
+  planar, `RodSystem3D` 3-D, one `BandedSystem` base);
+- structures: `Structure` (`structure`) and `Structure3D` (`structure3d`) on one
+  bookkeeping base (`constraints`: supports, ties, rigid groups, supernodes, node checks);
+- the problem layer (`problem`): the problem interface as protocols (`PushProblem`,
+  `System`), the push `Control`, states, load vector and load unit, `ConvergenceError`;
+  the one Newton (`newton`), energy descent (`descent`) and root finder (`roots`);
+- drivers: Newton equilibrium (`equilibrium`), displacement control (`displacement`) and
+  MGDC (`mgdc`), sharing path recording (`path`) and step control (`steps`); critical
+  points and branch switching (`branching`), stability (`stability`), single states at a
+  prescribed displacement (`states`).
+
+The paper's bistable unit is built on top, in `snapmorph.units`.
 """
 
 if __name__ != "snapmorph.solver":  # imported under its pre-0.2 top-level name `solver`
@@ -14,7 +29,8 @@ from snapmorph.solver.kernel_cache import discard_stale_kernels
 
 discard_stale_kernels()  # before any cached kernel is loaded (see solver.kernel_cache)
 
-from snapmorph.solver.continuation import ConvergenceError, Path  # noqa: E402
+from snapmorph.solver.path import Path  # noqa: E402
+from snapmorph.solver.problem import ConvergenceError  # noqa: E402
 from snapmorph.solver.structure import Rod, Structure  # noqa: E402
 from snapmorph.solver.structure3d import Rod3D, Structure3D  # noqa: E402
 

@@ -45,6 +45,15 @@ def element_dofs(elements, dof_map):
     return tuple(out)
 
 
+@njit(cache=True, inline="always")
+def _gather(q, nodes, k, x):
+    """x = the positions (x, z per node) of an element's first ``k`` ``nodes`` in the flat
+    ``q`` (k a constant at each call: the loop unrolls)."""
+    for a in range(k):
+        x[2 * a] = q[2 * nodes[a]]
+        x[2 * a + 1] = q[2 * nodes[a] + 1]
+
+
 @njit(cache=True)
 def assemble_system(q, elements, dofs, band, grad_red, grad_full):
     """Energy (J); writes the reduced band K, reduced gradient and full gradient (N).
@@ -58,34 +67,23 @@ def assemble_system(q, elements, dofs, band, grad_red, grad_full):
     grad_red[:] = 0.0
     grad_full[:] = 0.0
     energy = 0.0
-    x4 = np.empty(4)
-    g4 = np.empty(4)
-    h4 = np.empty((4, 4))
+    x4, g4, h4 = np.empty(4), np.empty(4), np.empty((4, 4))
+    x6, g6, h6 = np.empty(6), np.empty(6), np.empty((6, 6))
     for e in range(stretch_nodes.shape[0]):
         nodes = stretch_nodes[e]
-        for a in range(2):
-            x4[2 * a] = q[2 * nodes[a]]
-            x4[2 * a + 1] = q[2 * nodes[a] + 1]
+        _gather(q, nodes, 2, x4)
         energy += stretch_terms(x4, stretch_params[e, 0], stretch_params[e, 1], g4, h4)
         _scatter(nodes, stretch_dofs[e], 4, g4, h4, band, grad_red, grad_full)
-    x6 = np.empty(6)
-    g6 = np.empty(6)
-    h6 = np.empty((6, 6))
     for e in range(bend_nodes.shape[0]):
         nodes = bend_nodes[e]
-        for a in range(3):
-            x6[2 * a] = q[2 * nodes[a]]
-            x6[2 * a + 1] = q[2 * nodes[a] + 1]
+        _gather(q, nodes, 3, x6)
         energy += bending_terms(x6, bend_params[e, 0], bend_params[e, 1], g6, h6)
         _scatter(nodes, bend_dofs[e], 6, g6, h6, band, grad_red, grad_full)
     for e in range(spring_nodes.shape[0]):
         nodes = spring_nodes[e]
-        for a in range(2):
-            x4[2 * a] = q[2 * nodes[a]]
-            x4[2 * a + 1] = q[2 * nodes[a] + 1]
-        energy += spring_terms(
-            x4, spring_params[e, 0], spring_params[e, 1], spring_params[e, 2], g4, h4
-        )
+        _gather(q, nodes, 2, x4)
+        k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
+        energy += spring_terms(x4, k, ox, oz, g4, h4)
         _scatter(nodes, spring_dofs[e], 4, g4, h4, band, grad_red, grad_full)
     return energy
 
@@ -97,12 +95,3 @@ def total_energy(q, elements):
                  for conn in (elements[0], elements[2], elements[4]))
     return assemble_system(np.ascontiguousarray(q, dtype=float), elements, dofs,
                            np.zeros((1, 1)), np.zeros(1), np.zeros(q.shape[0]))
-
-
-@njit(cache=True)
-def apply_increment(q, dof_map, du, scale):
-    """q[j] += scale * du[dof_map[j]] for every free full DOF (tied DOFs move together)."""
-    for j in range(q.shape[0]):
-        r = dof_map[j]
-        if r >= 0:
-            q[j] += scale * du[r]

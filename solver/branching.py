@@ -8,7 +8,7 @@ compares the stability counts (`solver.stability`) and the direction of travel:
   the pushed displacement held): a limit point under displacement control (snap-back);
 - ``n_d`` changes while d keeps going: a bifurcation — another equilibrium branch crosses
   (its mode does not move the load, so both stiffnesses are singular there). The drivers
-  first retry such a step smaller (`solver.continuation.CROSSING_REFINE`): a fold of the
+  first retry such a step smaller (`solver.steps.CROSSING_REFINE`): a fold of the
   path that a long step jumped over (an imperfect structure) then shows as limit points;
 - d turns while ``(-1)^n_d`` does not flip with it: the sign of the determinant of K
   bordered with the path tangent, ``(-1)^n_d sign(dd/ds)``, has flipped, which happens at
@@ -39,6 +39,10 @@ import numpy as np
 import scipy.linalg
 
 from snapmorph.solver.banded import ldlt_factor, ldlt_solve
+from snapmorph.solver.descent import descend
+from snapmorph.solver.newton import TOL_DISP, newton
+from snapmorph.solver.problem import ConvergenceError, driver_system, load_vector
+from snapmorph.solver.roots import illinois
 from snapmorph.solver.stability import CriticalPoint, critical_modes, expand_full, expand_mode, held_count
 
 BRANCHES = ("follow", "primary")
@@ -137,17 +141,13 @@ class BranchMonitor:
     @property
     def system(self):
         if self._system is None:
-            from snapmorph.solver.continuation import _driver_system
-
-            self._system = _driver_system(self.structure)[0]
+            self._system = driver_system(self.structure)[0]
         return self._system
 
     @property
     def P(self):
         if self._P is None:
-            from snapmorph.solver.continuation import _load_vector
-
-            self._P = _load_vector(self.system, self.control) * self.load_unit
+            self._P = load_vector(self.system, self.control) * self.load_unit
         return self._P
 
     def start(self, state: PathState):
@@ -442,7 +442,17 @@ class BranchMonitor:
             sign = 1.0 if e[3] == n0 else -1.0
             return sign * float(np.exp(np.clip((e[4] - log0) / m, -700.0, 700.0)))
 
-        best, m = _illinois(lo, hi, evaluate, f_of, root, tol_tau, tol_f, max_eval)
+        crossing = [root(hi)]  # the multiplicity the current bracket implies
+
+        def restart(e):
+            if root(e) == crossing[0]:
+                return False
+            crossing[0] = root(e)  # fewer eigenvalues cross in the smaller bracket
+            return True
+
+        best, _ = illinois(lo, hi, evaluate, lambda e: f_of(e, crossing[0]), tol_tau, tol_f,
+                           max_eval, same_side=lambda e: e[3] == n0, restart=restart)
+        m = crossing[0]
         _, q, lam, _, _ = best
         modes = self._modes_at(q, m)
         if modes is None:
@@ -464,9 +474,7 @@ class BranchMonitor:
     def held_system(self):
         """The system with the pushed displacement held (built when first needed)."""
         if self._held is None:
-            from snapmorph.solver.continuation import _driver_system
-
-            self._held = _driver_system(
+            self._held = driver_system(
                 self.structure, [(self.control.node, self.control_axis)])[0]
         return self._held
 
@@ -520,22 +528,13 @@ class BranchMonitor:
         nothing as the corrector slides off along the mode) was moved on by the rig onto
         the other branch with no critical point recorded (3-D lateral-torsional
         buckling at 201 nodes)."""
-        from snapmorph.solver.continuation import _newton  # (a cycle at import time otherwise)
-
-        ctl, axis = self.control, self.control_axis
         sysd = self.held_system
-        delta = self.rig_step
-        q0 = self.structure.initial_state()
-        held = ctl.member_dofs[:, axis]
-        q = c.q.copy()
-        if c.d - a.d > 1e-3 * delta:
-            q += (c.q - a.q) * (delta / (c.d - a.d))
-        q[held] = q0[held] + ctl.direction[axis] * (c.d + delta)
-        it = _newton(sysd, q, 0.0, None, self.tol * self.fscale, 1e-11 * self.length,
-                     self.max_iter, 0.25 * self.length)
+        q = self._rig_predictor(a, c)
+        it = newton(sysd, q, 0.0, None, self.tol * self.fscale, TOL_DISP * self.length,
+                    self.max_iter, 0.25 * self.length)
         if it < 0:
             return None
-        F = ctl.force(sysd)
+        F = self.control.force(sysd)
         sysm = self.system
         self._restore(q)
         if not sysm.factor_ok:
@@ -557,23 +556,19 @@ class BranchMonitor:
         into a stable equilibrium there. Newton from the point (shifted along the arriving
         chord) finds the nearest equilibrium; while it is unstable with the displacement
         held, the state leaves it along all of its unstable modes together and descends the
-        energy (`_settle`). Every branch through the point is covered whatever the
-        multiplicity (a symmetric structure may have several modes crossing at once), and
-        the new state lies ahead in d. Returns a `Reroute` or None (then `_switch`)."""
+        energy (`solver.descent.descend`, the least-shift rule). Every branch through the
+        point is covered whatever the multiplicity (a symmetric structure may have several
+        modes crossing at once), and the new state lies ahead in d. Returns a `Reroute` or None (then `_switch`)."""
         if allow_jump is None:
             allow_jump = self.prefer_rig  # a displacement-controlled path is a rig
-        ctl, axis = self.control, self.control_axis
         sysd = self.held_system
-        delta = self.rig_step
-        q0 = self.structure.initial_state()
-        held = ctl.member_dofs[:, axis]
-        q = c.q.copy()
-        if c.d - a.d > 1e-3 * delta:  # predictor along the arriving chord
-            q += (c.q - a.q) * (delta / (c.d - a.d))
-        q[held] = q0[held] + ctl.direction[axis] * (c.d + delta)
-        if not self._settle(sysd, q, settle_iter):
+        q = self._rig_predictor(a, c)
+        try:
+            descend(sysd, q, self.tol * self.fscale, TOL_DISP * self.length, settle_iter,
+                    shift="least", push=0.1 * self.rig_step)
+        except ConvergenceError:
             return None
-        F = ctl.force(sysd)
+        F = self.control.force(sysd)
         # Did the structure stay on a branch through c, or jump to a far one (a branch
         # through c that turns back in d: the rig snaps)? A quarter of the way back
         # (d_c itself is singular), Newton from the new state lands a quarter (a branch
@@ -581,11 +576,9 @@ class BranchMonitor:
         # back to c, but stays about as far from c as the new state after a jump.
         gap = float(np.linalg.norm(q - c.q))
         back = q.copy()
-        back[held] = q0[held] + ctl.direction[axis] * (c.d + 0.25 * delta)
-        from snapmorph.solver.continuation import _newton  # (a cycle at import time otherwise)
-
-        it = _newton(sysd, back, 0.0, None, self.tol * self.fscale, 1e-11 * self.length,
-                     self.max_iter, 0.25 * self.length)
+        self._hold_at(back, c.d + 0.25 * self.rig_step)
+        it = newton(sysd, back, 0.0, None, self.tol * self.fscale, TOL_DISP * self.length,
+                    self.max_iter, 0.25 * self.length)
         jump = it < 0 or float(np.linalg.norm(back - c.q)) > 0.75 * gap
         if jump and not allow_jump:
             return None
@@ -609,61 +602,23 @@ class BranchMonitor:
         distance = float(np.linalg.norm(sysm.reduced(q) - sysm.reduced(c.q)))
         return Reroute(c, state, orient * uP, rate, distance)
 
-    def _settle(self, sysd, q, max_iter=100):
-        """Move q (pushed displacement held) to a stable equilibrium. While K has negative
-        eigenvalues: a push along directions of negative curvature read off the LDL^T
-        factor (``x_j = K^-1 L D e_j`` for each negative pivot j: ``x_j^T K x_j = D_j < 0``,
-        and the x_j are K-orthogonal, so their sum has negative curvature too), then Newton
-        steps on K + mu I, mu just above the most negative eigenvalue (found by bisection on
-        the LDL^T inertia), which go down the energy and let the unstable components grow
-        about tenfold per step, with a backtracking line search on the energy. Plain Newton
-        once K is positive definite. Returns True on success (q updated, the system
-        factorised there)."""
-        tol_force = self.tol * self.fscale
-        tol_disp = 1e-11 * self.length
-        du_max = np.inf
-        kicked = False
-        for _ in range(max_iter):
-            energy = sysd.evaluate(q)
-            g = sysd.grad[: sysd.n].copy()
-            if not np.all(np.isfinite(g)):
-                return False
-            band = sysd.band.copy()
-            status, negative, _ = ldlt_factor(sysd.band, 0.0)
-            sysd._dense_lu = None  # solve() uses the band factor just made
-            if status != 0:
-                negative = -1
-            if negative == 0:
-                sysd.factor_ok, sysd.negative_eigenvalues, sysd._dense_lu = True, 0, None
-                if float(np.max(np.abs(g))) <= tol_force or du_max <= tol_disp:
-                    return True
-                du = sysd.solve(-g)
-            else:
-                kick = None
-                if not kicked and status == 0:
-                    kick = _negative_curvature(sysd.band, lambda y: sysd.solve(y))
-                    kicked = True
-                mu = _definite_shift(band)
-                if mu is None:
-                    return False
-                shifted = band.copy()
-                shifted[0] += mu
-                ldlt_factor(shifted, 0.0)
-                du = ldlt_solve(shifted, np.ascontiguousarray(-g.reshape(-1, 1))).ravel()
-                if kick is not None:
-                    du += 0.1 * self.rig_step * kick
-            if not np.all(np.isfinite(du)):
-                return False
-            t = 1.0
-            q_base = q.copy()
-            while True:
-                sysd.increment(q, du, t)
-                if negative == 0 or sysd.evaluate(q) < energy or t < 1e-6:
-                    break
-                q[:] = q_base
-                t *= 0.5
-            du_max = float(np.max(np.abs(du))) * t
-        return False
+    def _rig_predictor(self, a, c):
+        """The state a rig step of ``rig_step`` beyond the point c predicts: c moved along
+        the chord arriving from a, with the pushed node held at d_c + rig_step."""
+        delta = self.rig_step
+        q = c.q.copy()
+        if c.d - a.d > 1e-3 * delta:  # predictor along the arriving chord
+            q += (c.q - a.q) * (delta / (c.d - a.d))
+        self._hold_at(q, c.d + delta)
+        return q
+
+    def _hold_at(self, q, d):
+        """Put the pushed node (and the nodes sharing its displacement) of the state q at
+        displacement d (m) along the (axis-aligned) push."""
+        ctl, axis = self.control, self.control_axis
+        held = ctl.member_dofs[:, axis]
+        q0 = self.structure.initial_state()
+        q[held] = q0[held] + ctl.direction[axis] * d
 
     def _switch(self, a, c, phi, eps):
         """Leave the point ``c`` along the branch that does not contain the state ``a``
@@ -746,91 +701,6 @@ class BranchMonitor:
             rate = expand_full(sysm, uP / flex)
         dz = np.append(sysm.reduced(q) - sysm.reduced(c.q), omega * (lam - c.lam))
         return Reroute(c, state, step, rate, float(np.linalg.norm(dz)))
-
-
-def _negative_curvature(factor, solve):
-    """A unit direction of negative curvature from an LDL^T factor in band storage (row 0:
-    D, rows k: L[j + k, j]) with negative pivots: the sum over negative pivots j of
-    ``x_j = K^-1 L D e_j`` (normalised, largest component positive), or None."""
-    n = factor.shape[1]
-    bw = factor.shape[0] - 1
-    total = np.zeros(n)
-    for j in np.flatnonzero(factor[0] < 0.0):
-        y = np.zeros(n)
-        y[j] = factor[0, j]
-        k = min(bw, n - 1 - j)
-        y[j + 1: j + 1 + k] = factor[0, j] * factor[1: 1 + k, j]
-        x = solve(y)
-        norm = float(np.linalg.norm(x))
-        if norm > 0.0 and np.isfinite(norm):
-            x = x / norm
-            total += x if x[np.argmax(np.abs(x))] > 0 else -x
-    norm = float(np.linalg.norm(total))
-    return total / norm if norm > 0.0 else None
-
-
-def _definite_shift(band, rel=0.05):
-    """The smallest mu (within ``rel``) that makes the banded symmetric K + mu I positive
-    definite, by bisection on the inertia of LDL^T; None when none is found."""
-    scale = float(np.max(np.abs(band[0])))
-    if not scale > 0.0 or not np.isfinite(scale):
-        return None
-
-    def definite(mu):
-        b = band.copy()
-        b[0] += mu
-        status, negative, _ = ldlt_factor(b, 0.0)
-        return status == 0 and negative == 0
-
-    hi = 1e-12 * scale
-    while not definite(hi):
-        hi *= 4.0
-        if hi > 1e3 * scale:
-            return None
-    lo = 0.0
-    while hi - lo > rel * hi:
-        mid = 0.5 * (lo + hi)
-        if definite(mid):
-            hi = mid
-        else:
-            lo = mid
-    return hi * (1.0 + rel)
-
-
-def _illinois(lo, hi, evaluate, f_of, root, tol_tau, tol_f, max_eval):
-    """Regula falsi with the Illinois modification on a bracket of evaluations
-    ``e = (tau, q, lam, label, log|g|)``; ``lo`` has the starting label, ``hi`` another.
-    ``f_of(e, m)``: the signed test value; ``root(e)``: the multiplicity m the bracket
-    [lo, e] implies. Returns (the evaluation with the smallest |f|, m)."""
-    label0 = lo[3]
-    weights = [1.0, 1.0]  # halve the weight of an end kept twice in a row
-    side = 0
-    m = root(hi)
-    best = hi
-    for _ in range(max_eval):
-        if hi[0] - lo[0] <= tol_tau or abs(f_of(best, m)) <= tol_f:
-            break
-        f_lo, f_hi = weights[0] * f_of(lo, m), weights[1] * f_of(hi, m)
-        tau = (lo[0] * f_hi - hi[0] * f_lo) / (f_hi - f_lo)
-        if not lo[0] < tau < hi[0]:
-            tau = 0.5 * (lo[0] + hi[0])
-        e = evaluate(tau, lo, hi) or evaluate(0.5 * (lo[0] + hi[0]), lo, hi)
-        if e is None:
-            break
-        if e[3] == label0:
-            lo, weights[0] = e, 1.0
-            if side == 1:
-                weights[1] *= 0.5
-            side = 1
-        else:
-            hi, weights[1] = e, 1.0
-            if side == -1:
-                weights[0] *= 0.5
-            side = -1
-            if root(hi) != m:  # fewer eigenvalues cross in the smaller bracket
-                m, weights, side = root(hi), [1.0, 1.0], 0
-        best = min((lo, hi), key=lambda x: abs(f_of(x, m)))
-    return best, m
 
 
 def _classify(prev, neg_disp, dir_disp):

@@ -157,6 +157,21 @@ def _curvature9(y, g9, h9):
                           np.empty((9, 9)))
 
 
+@njit(cache=True, inline="always")
+def _curvature_inputs(z, which, y):
+    """The 9 numbers kappa1 (``which`` = 1) or kappa2 (2) of the frame pair ``z`` depends
+    on, into ``y``: t_a, t_b and the signed sum of a director of each frame. Returns (ua,
+    ub, sign): where in z the two directors start, and the sum's sign."""
+    ua = _CURV_U[which - 1, 0]
+    ub = _CURV_U[which - 1, 1]
+    sgn = 1.0 if which == 1 else -1.0
+    for k in range(3):
+        y[k] = z[k]
+        y[3 + k] = z[9 + k]
+        y[6 + k] = sgn * (z[ua + k] + z[ub + k])
+    return ua, ub, sgn
+
+
 @njit(cache=True)
 def material_curvature(z, which, grad, hess):
     """kappa1 (``which`` = 1) or kappa2 (2) of the frame pair ``z`` (18,); writes its gradient
@@ -165,13 +180,7 @@ def material_curvature(z, which, grad, hess):
     g9 = np.empty(9)
     h9 = np.empty((9, 9))
     zi = np.empty(9, dtype=np.int64)  # z index of each y component (u: the first director)
-    ua = _CURV_U[which - 1, 0]
-    ub = _CURV_U[which - 1, 1]
-    sgn = 1.0 if which == 1 else -1.0
-    for k in range(3):
-        y[k] = z[k]
-        y[3 + k] = z[9 + k]
-        y[6 + k] = sgn * (z[ua + k] + z[ub + k])
+    ua, ub, sgn = _curvature_inputs(z, which, y)
     kappa = _curvature9(y, g9, h9)
     grad[:] = 0.0
     hess[:, :] = 0.0
@@ -202,13 +211,7 @@ def bending_add(z, k1, k2, kappa1_bar, kappa2_bar, grad, hess, ws):
     y, g9, h9, gn, hn, gd, hd = ws[0], ws[1], ws[2], ws[3], ws[4], ws[5], ws[6]
     energy = 0.0
     for which in range(1, 3):
-        ua = _CURV_U[which - 1, 0]
-        ub = _CURV_U[which - 1, 1]
-        sgn = 1.0 if which == 1 else -1.0
-        for k in range(3):
-            y[k] = z[k]
-            y[3 + k] = z[9 + k]
-            y[6 + k] = sgn * (z[ua + k] + z[ub + k])
+        ua, ub, sgn = _curvature_inputs(z, which, y)
         kappa = _curvature9_ws(y, g9, h9, gn, hn, gd, hd)
         kk = k1 if which == 1 else k2
         dk = kappa - (kappa1_bar if which == 1 else kappa2_bar)
@@ -402,6 +405,13 @@ _TBUA, _TBUB, _UATA, _UBTA, _M1BTA, _M2BTA, _TAM1A, _TAM2A = 38, 39, 40, 41, 42,
 _TN1, _TN2, _TY = 46, 47, 48
 _O1A, _O1B, _O2A, _O2B, _O3A, _O3B, _SK, _XT = 49, 50, 51, 52, 53, 54, 55, 56
 _PAIR_ROWS = 57
+# the cross products `pair_terms_edges` forms, (i, j, k): row k = row i x row j; of the
+# frame vectors (w = t_a x t_b, and V = m1_a x m1_b + m2_a x m2_b with S), and of the
+# gradient's vectors with the frames
+_FRAME_CROSSES = ((_TA, _TB, _W), (_M1A, _M1B, _V), (_M2A, _M2B, _S))
+_GRADIENT_CROSSES = ((_TB, _UA, _TBUA), (_TB, _UB, _TBUB), (_UA, _TA, _UATA),
+                     (_UB, _TA, _UBTA), (_M1B, _TA, _M1BTA), (_M2B, _TA, _M2BTA),
+                     (_TA, _M1A, _TAM1A), (_TA, _M2A, _TAM2A))
 
 
 @njit(cache=True)
@@ -419,6 +429,13 @@ def _vcross(W, i, j, k):
     W[c] = W[a + 1] * W[b + 2] - W[a + 2] * W[b + 1]
     W[c + 1] = W[a + 2] * W[b] - W[a] * W[b + 2]
     W[c + 2] = W[a] * W[b + 1] - W[a + 1] * W[b]
+
+
+@njit(cache=True, inline="always")
+def _vcrosses(W, table):
+    """`_vcross` for every (i, j, k) of ``table``, in order."""
+    for i, j, k in table:
+        _vcross(W, i, j, k)
 
 
 @njit(cache=True, inline="always")
@@ -522,9 +539,7 @@ def pair_terms_edges(val_a, jac_a, hess_a, sign_a, val_b, jac_b, hess_b, sign_b,
     _omega(val_b, jac_b, W, _OMB)
     # D = 1 + t_a.t_b, N1 = u1.w, N2 = -u2.w (w = t_a x t_b, u1 = m2_a + m2_b,
     # u2 = m1_a + m1_b), X = 1 + tr Q, Y = t_a.V (V = m1_a x m1_b + m2_a x m2_b)
-    _vcross(W, _TA, _TB, _W)
-    _vcross(W, _M1A, _M1B, _V)
-    _vcross(W, _M2A, _M2B, _S)
+    _vcrosses(W, _FRAME_CROSSES)
     for k in range(3):
         W[4 * _V + k] += W[4 * _S + k]
         W[4 * _U1 + k] = W[4 * _M2A + k] + W[4 * _M2B + k]
@@ -556,14 +571,7 @@ def pair_terms_edges(val_a, jac_a, hess_a, sign_a, val_b, jac_b, hess_b, sign_b,
         W[4 * _UA + k] = c1 * W[4 * _M2A + k] - c2 * W[4 * _M1A + k]
         W[4 * _UB + k] = c1 * W[4 * _M2B + k] - c2 * W[4 * _M1B + k]
         W[4 * _U + k] = W[4 * _UA + k] + W[4 * _UB + k]
-    _vcross(W, _TB, _UA, _TBUA)
-    _vcross(W, _TB, _UB, _TBUB)
-    _vcross(W, _UA, _TA, _UATA)
-    _vcross(W, _UB, _TA, _UBTA)
-    _vcross(W, _M1B, _TA, _M1BTA)
-    _vcross(W, _M2B, _TA, _M2BTA)
-    _vcross(W, _TA, _M1A, _TAM1A)
-    _vcross(W, _TA, _M2A, _TAM2A)
+    _vcrosses(W, _GRADIENT_CROSSES)
     # dE/dz, carried to the unsigned frames (t and m2 of a reversed edge flip)
     for k in range(3):
         w = W[4 * _W + k]

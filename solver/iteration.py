@@ -1,12 +1,19 @@
-"""Fused Newton iterations: assemble, factorise, solve and update in one compiled call.
+"""Fused Newton and MGDC iterations: assemble, factorise, solve and update in one compiled
+call, for planar rods (`newton_iteration`, `mgdc_iteration`) and 3-D rods
+(`newton_iteration3d`, `mgdc_iteration3d`).
 
 The path followers spend most of their time in Python overhead between small compiled calls
 (about 100 us per iteration for a 100-node rod against some 15 us of arithmetic). These
 kernels do one whole iteration per call. They return a status so that the driver can fall
-back to `ReducedSystem` (dense pivoting solve) when LDL^T without pivoting meets a tiny pivot.
+back to the system's general path (`solver.system`: dense pivoting solve) when LDL^T without
+pivoting meets a tiny pivot.
 
-Status: 0 converged (nothing updated; K at q is factorised in ``band``), 1 LDL^T failed
-(nothing updated), 2 updated q (and lam).
+Status: 0 converged (nothing updated; K at q is factorised in ``band``), 1 LDL^T failed or
+non-finite residual (nothing updated), 2 updated q (and lam).
+
+3-D rods apply the reduced increment ``du`` as ``q[j] += dof_scale[j] du[dof_map[j]]``
+(reduced twist DOFs are lengths, see `solver.system.RodSystem3D`); ``du_max`` is in reduced
+units, as the general path measures it.
 """
 
 from __future__ import annotations
@@ -15,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from snapmorph.solver.assembly import assemble_system
+from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws
 from snapmorph.solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
 
 
@@ -135,4 +143,51 @@ def mgdc_iteration(q, lam, P, uP1, elements, dofs, dof_map, band, heights, grad,
     if status != 2:
         return status, neg, r_max, 0.0, 0.0, energy
     du_max = _apply(q, dof_map, work[:, 0])
+    return 2, neg, r_max, du_max, dl, energy
+
+
+@njit(cache=True)
+def _assemble3d(q, model, dof_scale, band, heights, grad, grad_full):
+    (n_nodes, edge_nodes, src_t, src_d, stretch_params, pair_edges, pair_signs, pair_params,
+     sf, sr, pf, pr, vals, jacs, hesss) = model
+    return assemble_system3d_ws(q, n_nodes, edge_nodes, src_t, src_d, stretch_params,
+                                pair_edges, pair_signs, pair_params, sf, sr, pf, pr, dof_scale,
+                                band, grad, grad_full, vals, jacs, hesss, heights)
+
+
+@njit(cache=True)
+def _apply_scaled(q, dof_map, dof_scale, du):
+    apply_scaled_increment(q, dof_map, dof_scale, du, 1.0)
+    return max_abs(du)
+
+
+@njit(cache=True)
+def newton_iteration3d(q, lam, P, model, dof_map, dof_scale, band, heights, grad, grad_full,
+                       work, pivot_tol, tol_force):
+    """One Newton iteration at fixed load lam P (N) of 3-D rods. ``model``: the tuple of
+    `RodSystem3D.model_arrays`; ``work`` (n, 3) scratch.
+
+    Returns (status, negative_eigenvalues, residual_max, du_max, energy)."""
+    energy = _assemble3d(q, model, dof_scale, band, heights, grad, grad_full)
+    status, neg, r_max = newton_correction(lam, P, band, heights, grad, work, pivot_tol,
+                                           tol_force)
+    if status != 2:
+        return status, neg, r_max, 0.0, energy
+    du_max = _apply_scaled(q, dof_map, dof_scale, work[:, 1])
+    return 2, neg, r_max, du_max, energy
+
+
+@njit(cache=True)
+def mgdc_iteration3d(q, lam, P, uP1, model, dof_map, dof_scale, band, heights, grad,
+                     grad_full, work, pivot_tol, tol_force):
+    """One MGDC corrector iteration of 3-D rods (see `mgdc_correction`).
+    ``work`` (n, 3) scratch.
+
+    Returns (status, negative_eigenvalues, residual_max, du_max, dlam, energy)."""
+    energy = _assemble3d(q, model, dof_scale, band, heights, grad, grad_full)
+    status, neg, r_max, dl = mgdc_correction(lam, P, uP1, band, heights, grad, work,
+                                             pivot_tol, tol_force)
+    if status != 2:
+        return status, neg, r_max, 0.0, 0.0, energy
+    du_max = _apply_scaled(q, dof_map, dof_scale, work[:, 0])
     return 2, neg, r_max, du_max, dl, energy

@@ -24,6 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from snapmorph.solver.problem import load_unit, load_vector, make_control, state_from
+
 __all__ = [
     "StateStability",
     "CriticalPoint",
@@ -102,8 +104,6 @@ def state_stability(structure, positions, node, direction=(0.0, -1.0),
     The state need not be solved here; it should be an equilibrium for the counts to mean
     stability. ``system``: the structure's `reduced_system()` to reuse (several states).
     Raises ValueError when K is singular (a critical state)."""
-    from snapmorph.solver.continuation import _load_unit, _load_vector, make_control, state_from
-
     length, fscale = structure.scales()
     control = make_control(structure, node, direction, 1e-3 * length, "mgdc")
     if system is None:
@@ -111,7 +111,7 @@ def state_stability(structure, positions, node, direction=(0.0, -1.0),
     system.evaluate(state_from(structure, positions))
     if not system.factor():
         raise ValueError("the tangent stiffness is singular at this state (a critical point)")
-    P = _load_vector(system, control) * _load_unit(fscale)  # exact scaling: no underflow
+    P = load_vector(system, control) * load_unit(fscale)  # exact scaling: no underflow
     flexibility = float(P @ system.solve(P))
     neg = system.negative_eigenvalues
     return StateStability(neg, held_count(neg, flexibility))
@@ -168,8 +168,6 @@ def eigenmodes(structure, count=6, positions=None, hold=()):
     over the free DOFs and its largest component positive. Use a mode as an imperfection
     shape with `seed_imperfection`."""
     system = structure.reduced_system(extra_fixed=list(hold) or None)
-    from snapmorph.solver.continuation import state_from
-
     system.evaluate(state_from(structure, positions))
     count = int(min(max(count, 1), system.n))
     w, v = scipy.linalg.eig_banded(system.band, lower=True, select="i",

@@ -10,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.optimize
 
-from snapmorph.solver.continuation import TOL_DISP, ConvergenceError, _newton, make_control, state_from
+from snapmorph.solver.newton import TOL_DISP, newton
+from snapmorph.solver.problem import ConvergenceError, make_control, state_from
+from snapmorph.solver.roots import illinois
 
 
 #: `DisplacementProbe.solve`: the numbers of equal steps in which the prescribed displacement
@@ -44,8 +46,7 @@ class DisplacementProbe:
         held = c.member_dofs[:, c.axis]
         sign = c.direction[c.axis]
         d_start = float((start[held[0]] - self.q0[held[0]]) * sign)
-        if hasattr(self.system, "reset_frames"):  # 3-D rods: read q's twists as canonical
-            self.system.reset_frames()
+        self.system.reset_frames()  # 3-D rods: read q's twists as canonical
         # Newton straight to d first; if it fails, march the held displacement there from
         # the guess's own in 4, then 16 steps: near a bifurcation of the held structure (at
         # a force maximum, docs/path-following.md) K is nearly singular and a Newton started
@@ -54,8 +55,8 @@ class DisplacementProbe:
             q = start.copy()
             for k in range(1, n_sub + 1):
                 q[held] = self.q0[held] + sign * (d_start + (d - d_start) * k / n_sub)
-                it = _newton(self.system, q, 0.0, None, self.tol * self.fscale,
-                             TOL_DISP * self.length, self.max_iter, 0.25 * self.length)
+                it = newton(self.system, q, 0.0, None, self.tol * self.fscale,
+                            TOL_DISP * self.length, self.max_iter, 0.25 * self.length)
                 if it < 0:
                     break
             if it >= 0:
@@ -121,23 +122,27 @@ def _on_parabola(ds, values, x):
 
 
 def zero_force_displacement(probe, d0, d1, pos0, pos1, F0, F1, tol_F, max_steps=40):
-    """Displacement in [d0, d1] where F changes sign, by safeguarded secant (regula falsi,
-    Illinois) on displacement-controlled solves. Returns (d, positions)."""
+    """Displacement in [d0, d1] where F changes sign (F0, F1 N at the ends, whose states
+    ``pos0``, ``pos1`` are (n_nodes, dim) positions or full states): regula falsi
+    (`solver.roots.illinois`) on displacement-controlled solves, each started from the
+    state of the nearer end of the bracket, until |F| <= ``tol_F``. Returns (d,
+    positions), and leaves the full state there in ``probe.last_state``. Raises
+    ConvergenceError."""
     if not F0 * F1 <= 0.0:
         raise ConvergenceError("the bracket does not contain a zero of the force")
-    a, b, fa, fb = d0, d1, F0, F1
-    pa, pb = pos0, pos1
-    side = 0
-    for _ in range(max_steps):
-        x = b - fb * (b - a) / (fb - fa)
-        p, fx, _ = probe.solve(pa if abs(x - a) < abs(x - b) else pb, x)
-        if abs(fx) <= tol_F:
-            return x, p
-        if fx * fb < 0:
-            a, fa, pa = b, fb, pb
-            side = 0
-        else:
-            fa *= 0.5 if side == 1 else 1.0
-            side = 1
-        b, fb, pb = x, fx, p
-    raise ConvergenceError("the zero-force state was not located")
+    st = probe.structure
+
+    def evaluate(x, lo, hi):
+        near = lo if abs(x - lo[0]) < abs(x - hi[0]) else hi
+        try:
+            p, fx, _ = probe.solve(near[3], x)
+        except ConvergenceError:
+            return None
+        return (x, fx, p, probe.last_state)
+
+    ends = [(d, F, pos, state_from(st, pos)) for d, F, pos in ((d0, F0, pos0), (d1, F1, pos1))]
+    best, found = illinois(ends[0], ends[1], evaluate, lambda s: s[1], 0.0, tol_F, max_steps)
+    if not found:
+        raise ConvergenceError("the zero-force state was not located")
+    probe.last_state = best[3]
+    return best[0], best[2]

@@ -1,8 +1,9 @@
 """`Structure`: rods in the x–z plane, their bonds and supports, and the push experiment.
 
 A structure owns arrays (node positions, element connectivity, stiffnesses, constraints);
-the physics lives in `solver.energies`, assembly in `solver.assembly`, and the path followers
-in `solver.continuation`. All quantities are SI (m, N, Pa).
+the physics lives in `solver.energies`, assembly in `solver.assembly`, the bookkeeping of
+supports and shared displacements in `solver.constraints`, and the path followers in
+`solver.mgdc` and `solver.displacement`. All quantities are SI (m, N, Pa).
 """
 
 from __future__ import annotations
@@ -13,9 +14,10 @@ import numpy as np
 import scipy.sparse
 import scipy.sparse.csgraph
 
+from snapmorph.solver.assembly import total_energy
+from snapmorph.solver.constraints import ConstrainedStructure, bandwidth
+from snapmorph.solver.problem import state_from
 from snapmorph.solver.system import ReducedSystem
-
-_COMPONENTS = {"x": (0,), "z": (1,), "xz": (0, 1), "zx": (0, 1)}
 
 # The thinnest rod `add_rod` accepts: arc length / smallest thickness. The ratio of
 # stretching to bending stiffness grows as 12 (length / thickness)^2 (length / edge), and
@@ -91,52 +93,30 @@ def _per_edge(value, n_edges, name):
     return arr
 
 
-class UnionFind:
-    """Groups of nodes that share displacements (ties, rigid sets, joints); the
-    representative of a group is its lowest node."""
-
-    def __init__(self, n):
-        self.parent = list(range(n))
-
-    def find(self, a):
-        while self.parent[a] != a:
-            self.parent[a] = self.parent[self.parent[a]]
-            a = self.parent[a]
-        return a
-
-    def union(self, a, b):
-        ra, rb = self.find(a), self.find(b)
-        if ra != rb:
-            self.parent[max(ra, rb)] = min(ra, rb)
-
-
-class Structure:
+class Structure(ConstrainedStructure):
     """A planar structure of discrete elastic rods.
 
     >>> st = Structure()
     >>> rod = st.add_rod(xz, width=5e-3, thickness=0.5e-3, E=2.2e9)
     >>> st.fix(rod.nodes[0], "xz"); path = st.push(rod.nodes[-1], (0, -1), 0.01)
 
-    The path followers use only the members listed in ``docs/problem-interface.md``
-    (``dim``, ``component_names``, ``initial_state``, ``node_dofs``, ``positions_of``,
-    ``state_fields``, ``scales``, ``supernodes``, ``fixed_components``, ``reduced_system``).
+    The path followers use only the members of `solver.problem.PushProblem`
+    (docs/problem-interface.md); the bookkeeping of nodes, supports and shared displacements
+    is `solver.constraints.ConstrainedStructure`'s.
     """
 
     dim = 2  # components per node position (x, z)
     component_names = "xz"
+    component_choices = "'x', 'z' or 'xz'"
 
     def __init__(self):
-        self.rods: list[Rod] = []
-        self._positions: list[np.ndarray] = []
+        super().__init__()
         self._stretch_nodes: list[np.ndarray] = []
         self._stretch_params: list[np.ndarray] = []
         self._bend_nodes: list[np.ndarray] = []
         self._bend_params: list[np.ndarray] = []
         self._spring_nodes: list[tuple[int, int]] = []
         self._spring_params: list[tuple[float, float, float]] = []
-        self._fixed: dict[int, set[int]] = {}
-        self._merges: list[tuple[int, int]] = []
-        self._rigid_groups: list[list[int]] = []
         # clamps: one record per clamped side, each with a ghost node appended after the
         # real nodes in the state vector (see `clamp`)
         self._clamps: list[dict] = []
@@ -145,20 +125,8 @@ class Structure:
         self._rod_E: list[float] = []
         self._stretch_free: list[np.ndarray] = []
         self._bend_free: list[np.ndarray] = []
-        self._cache = None
 
     # ------------------------------------------------------------------ building
-    @property
-    def n_nodes(self) -> int:
-        return int(sum(len(p) for p in self._positions))
-
-    @property
-    def reference_positions(self) -> np.ndarray:
-        """(n_nodes, 2) stress-free node positions, m."""
-        if not self._positions:
-            return np.zeros((0, 2))
-        return np.concatenate(self._positions, axis=0)
-
     def add_rod(self, xz, width, thickness, E) -> Rod:
         """Add a rod through the points ``xz`` (N, 2) m; its shape is stress free.
 
@@ -239,6 +207,16 @@ class Structure:
         """Real nodes plus the clamps' ghost nodes (held or moving with their node)."""
         return self.n_nodes + len(self._clamps)
 
+    def _share_extra(self, uf):
+        for k, c in enumerate(self._clamps):
+            if not c["hold_position"]:  # a sliding clamp's ghost translates with its node
+                uf.union(c["node"], self.n_nodes + k)
+
+    def _hold_extra(self, fixed_rep, rep):
+        for k, c in enumerate(self._clamps):
+            if c["hold_position"]:
+                fixed_rep[rep[self.n_nodes + k], :] = True
+
     def _ghost_positions(self, X=None):
         """(n_clamps, 2) reference positions of the ghost nodes, m."""
         if not self._clamps:
@@ -252,30 +230,12 @@ class Structure:
         X = self.reference_positions
         return np.concatenate([X, self._ghost_positions(X)]).reshape(-1).copy()
 
-    def node_dofs(self, node) -> np.ndarray:
-        """(2,) int64 indices into the state vector of ``node``'s x and z."""
-        node = int(node)
-        return np.array([2 * node, 2 * node + 1], dtype=np.int64)
-
-    def positions_of(self, q) -> np.ndarray:
-        """(n_nodes, 2) node positions (m) held in the state vector ``q`` (a view)."""
-        return np.asarray(q)[: 2 * self.n_nodes].reshape(-1, 2)
-
     def state_fields(self, q) -> dict:
         """Per-state arrays recorded on a path besides positions: none for planar rods."""
         return {}
 
-    def scales(self):
-        """(length m, force N): the structure's size (largest extent of its reference shape)
-        and EI_max / length^2; tolerances and step sizes are taken relative to these."""
-        if not self.rods:
-            raise ValueError("the structure has no rods")
-        X = self.reference_positions
-        length = float(max(np.ptp(X[:, 0]), np.ptp(X[:, 1])))
-        if not length > 0.0:
-            length = float(max(np.max(np.abs(X)), 1e-300))
-        EI = max(float(np.max(r.EI)) for r in self.rods)  # N m^2
-        return length, EI / length**2
+    def _max_bending_stiffness(self) -> float:
+        return max(float(np.max(r.EI)) for r in self.rods)  # N m^2
 
     def with_reference_positions(self, positions) -> "Structure":
         """A copy with the same rods, sections and constraints on new stress-free node
@@ -309,18 +269,6 @@ class Structure:
                 new.clamp(c["node"], toward=c["toward"], hold_position=c["hold_position"])
         return new
 
-    def min_thickness(self) -> float:
-        """The smallest section thickness of any rod, m."""
-        return min(float(np.min(rod.thickness)) for rod in self.rods)
-
-    def _check_node(self, node, name="node"):
-        if isinstance(node, (bool, np.bool_)) or not isinstance(node, (int, np.integer)):
-            raise ValueError(f"{name} must be an integer node index; got {node!r}")
-        node = int(node)
-        if not 0 <= node < self.n_nodes:
-            raise ValueError(f"{name} {node} does not exist (valid: 0 .. {self.n_nodes - 1})")
-        return node
-
     def fix(self, node, components="xz"):
         """Hold the displacement of ``node`` at zero in "x", "z" or "xz".
 
@@ -329,11 +277,7 @@ class Structure:
         the tangent of the first edge, i.e. at the edge's midpoint, half an edge into the
         rod: the clamp sits ds/2 away from node 0 and results converge only as O(1/N).
         `clamp` holds position and tangent at exactly the node (O(1/N^2))."""
-        node = self._check_node(node)
-        if components not in _COMPONENTS:
-            raise ValueError(f"components must be 'x', 'z' or 'xz'; got {components!r}")
-        self._fixed.setdefault(node, set()).update(_COMPONENTS[components])
-        self._cache = None
+        self._fix(node, components)
 
     def clamp(self, node, toward, hold_position=True, tangent=None):
         """Clamp ``node``: hold its tangent (and, with ``hold_position``, its position) at
@@ -350,8 +294,8 @@ class Structure:
         term replaced by the two one-sided ones). The ghosts are internal: positions,
         paths and `n_nodes` show real nodes only.
         """
-        node = self._check_node(node)
-        toward = self._check_node(toward, "toward")
+        node = self.check_node(node)
+        toward = self.check_node(toward, "toward")
         found = None
         for rod in self.rods:
             idx = np.flatnonzero(rod.nodes == node)
@@ -403,16 +347,6 @@ class Structure:
             self._fixed.setdefault(node, set()).update((0, 1))
         self._cache = None
 
-    def rigid(self, nodes):
-        """Make ``nodes`` translate together (the paper's rigid joint through W)."""
-        nodes = [self._check_node(n, "rigid node") for n in nodes]
-        if len(nodes) < 2 or len(set(nodes)) != len(nodes):
-            raise ValueError("rigid needs at least two distinct nodes")
-        self._rigid_groups.append(nodes)
-        for a, b in zip(nodes[:-1], nodes[1:]):
-            self._merges.append((a, b))
-        self._cache = None
-
     def tie(self, node_a, node_b, method="exact", stiffness=None):
         """Bond two nodes: ``method="exact"`` (equal displacements, u = W u_i) or
         ``"spring"`` (stiff zero-length spring; ``stiffness`` N/m, default 1e3 times the
@@ -420,25 +354,20 @@ class Structure:
 
         Both keep the nodes' reference offset fixed in global axes, so bond coincident nodes
         (as the unit does): an offset bond resists rigid rotation of the structure."""
-        a = self._check_node(node_a, "node_a")
-        b = self._check_node(node_b, "node_b")
-        if a == b:
-            raise ValueError(f"cannot tie node {a} to itself")
-        if method == "exact":
-            self._merges.append((a, b))
-        elif method == "spring":
-            if stiffness is None:
-                stiffness = 1e3 * self._max_axial_stiffness((a, b))
-            stiffness = float(stiffness)
-            if not np.isfinite(stiffness) or stiffness <= 0:
-                raise ValueError(f"spring stiffness must be finite and > 0 N/m; got {stiffness!r}")
-            X = self.reference_positions
-            off = X[a] - X[b]
-            self._spring_nodes.append((a, b))
-            self._spring_params.append((stiffness, off[0], off[1]))
-        else:
+        super().tie(node_a, node_b, method, stiffness)
+
+    def _tie_other(self, a, b, method, stiffness):
+        if method != "spring":
             raise ValueError(f"tie method must be 'exact' or 'spring'; got {method!r}")
-        self._cache = None
+        if stiffness is None:
+            stiffness = 1e3 * self._max_axial_stiffness((a, b))
+        stiffness = float(stiffness)
+        if not np.isfinite(stiffness) or stiffness <= 0:
+            raise ValueError(f"spring stiffness must be finite and > 0 N/m; got {stiffness!r}")
+        X = self.reference_positions
+        off = X[a] - X[b]
+        self._spring_nodes.append((a, b))
+        self._spring_params.append((stiffness, off[0], off[1]))
 
     def _max_axial_stiffness(self, nodes):
         best = 0.0
@@ -516,30 +445,6 @@ class Structure:
             np.ascontiguousarray(springs_p),
         )
 
-    def supernodes(self):
-        """Node -> representative of the group of nodes that share displacements."""
-        uf = UnionFind(self._n_total)
-        for a, b in self._merges:
-            uf.union(a, b)
-        for k, c in enumerate(self._clamps):
-            if not c["hold_position"]:  # a sliding clamp's ghost translates with its node
-                uf.union(c["node"], self.n_nodes + k)
-        return np.array([uf.find(i) for i in range(self._n_total)], dtype=np.int64)
-
-    def fixed_components(self, rep=None):
-        """(n_nodes, 2) bool: component held by a support (shared across merged nodes); rows
-        past n_nodes belong to the clamps' ghost nodes."""
-        if rep is None:
-            rep = self.supernodes()
-        fixed_rep = np.zeros((self._n_total, 2), dtype=bool)
-        for node, comps in self._fixed.items():
-            for c in comps:
-                fixed_rep[rep[node], c] = True
-        for k, c in enumerate(self._clamps):
-            if c["hold_position"]:
-                fixed_rep[rep[self.n_nodes + k], :] = True
-        return fixed_rep[rep]
-
     def reduced_system(self, extra_fixed=None, normalized=False) -> ReducedSystem:
         """Assemble the DOF map (ordered by reverse Cuthill–McKee) and band storage.
 
@@ -551,11 +456,7 @@ class Structure:
         """
         if self.n_nodes == 0:
             raise ValueError("the structure has no rods")
-        rep = self.supernodes()
-        fixed = self.fixed_components(rep)
-        if extra_fixed:
-            for node, c in extra_fixed:
-                fixed[rep == rep[node], c] = True
+        rep, fixed = self._held(extra_fixed)
         uniq, group = np.unique(rep, return_inverse=True)
         n_groups = len(uniq)
 
@@ -590,29 +491,18 @@ class Structure:
                     group_dof[gidx, comp] = k
                     k += 1
         dof_map = group_dof[group].reshape(-1)
-
-        bandwidth = 0
-        for conn in (elements[0], elements[2], elements[4]):
-            if conn.shape[0] == 0:
-                continue
-            d = dof_map.reshape(-1, 2)[conn].reshape(conn.shape[0], -1)
-            big = np.iinfo(np.int64).max
-            hi = np.max(d, axis=1)
-            lo = np.min(np.where(d < 0, big, d), axis=1)
-            free = hi >= 0
-            if free.any():
-                bandwidth = max(bandwidth, int(np.max(hi[free] - lo[free])))
         if k == 0:
             raise ValueError("every degree of freedom is fixed: nothing to solve")
-        system = ReducedSystem(self.elements(normalized), dof_map, k, bandwidth)
+        node_map = dof_map.reshape(-1, 2)
+        bw = bandwidth(*(node_map[conn].reshape(conn.shape[0], 2 * conn.shape[1])
+                         for conn in (elements[0], elements[2], elements[4])))
+        system = ReducedSystem(self.elements(normalized), dof_map, k, bw)
         system.force_unit = self.E_max / E_REF if normalized else 1.0
         return system
 
     # ------------------------------------------------------------------ energy access
     def energy(self, positions=None) -> float:
         """Total elastic energy (J) at ``positions`` (n_nodes, 2) m (default: reference)."""
-        from snapmorph.solver.assembly import total_energy
-
         q = self._flat(positions)
         return float(total_energy(q, self.elements()))
 
@@ -644,8 +534,6 @@ class Structure:
     def _flat(self, positions):
         if positions is None:
             return self.initial_state()
-        from snapmorph.solver.continuation import state_from
-
         return state_from(self, positions)
 
     # ------------------------------------------------------------------ experiments
@@ -656,22 +544,15 @@ class Structure:
         path follower (passes limit points, negative stiffness and snap-back).
         ``method="displacement"``: the node's displacement along an axis-aligned direction
         is prescribed step by step. Every other constraint on the node is kept.
-        Returns a `solver.continuation.Path`. Options: see the drivers in
-        `solver.continuation`.
+        Returns a `solver.path.Path`. Options: see the drivers `solver.mgdc.follow_mgdc`
+        and `solver.displacement.follow_displacement`.
         """
-        from snapmorph.solver.continuation import follow_displacement, follow_mgdc, make_control
-
-        control = make_control(self, node, direction, distance, method)
-        if method == "mgdc":
-            return follow_mgdc(self, control, **options)
-        return follow_displacement(self, control, **options)
+        return self._push(node, direction, distance, method, options)
 
     def solve_equilibrium(self, positions, node=None, direction=(0.0, -1.0), force=0.0, **options):
         """Equilibrium near ``positions`` with ``force`` (N) applied to ``node`` along
         ``direction`` (no load when ``node`` is None). Returns (positions, info dict)."""
-        from snapmorph.solver.continuation import equilibrium
-
-        return equilibrium(self, positions, node, direction, force, **options)
+        return self._solve_equilibrium(positions, node, direction, force, options)
 
 
 def _tangent_estimate(X, i):

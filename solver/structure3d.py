@@ -2,8 +2,9 @@
 joints, ties, supports and clamps, and the push experiment on the shared path followers.
 
 Physics in `solver.energies3d` and `solver.frames3d`, assembly in `solver.assembly3d`, the
-constrained system in `solver.system3d`; the drivers are the planar solver's own
-(`solver.continuation`, `solver.branching`) through docs/problem-interface.md. SI units.
+constrained system `solver.system.RodSystem3D`, the bookkeeping of supports and shared
+displacements `solver.constraints`; the drivers are the planar solver's own (`solver.mgdc`,
+`solver.displacement`, `solver.branching`) through docs/problem-interface.md. SI units.
 
 >>> st = Structure3D()
 >>> rod = st.add_rod(xyz, width=5e-3, thickness=0.5e-3, E=2.2e9, nu=0.38, normal=(0, 0, 1))
@@ -19,11 +20,14 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse
 
+from snapmorph.solver.assembly3d import element_dofs3d
+from snapmorph.solver.constraints import ConstrainedStructure, bandwidth
+from snapmorph.solver.descent import descend
 from snapmorph.solver.energies3d import material_curvature, tip_moment_terms, twist_angle
 from snapmorph.solver.frames3d import space_parallel_frames
 from snapmorph.solver.ordering import envelope_order
-from snapmorph.solver.structure import UnionFind
-from snapmorph.solver.system3d import RodSystem3D
+from snapmorph.solver.problem import ConvergenceError
+from snapmorph.solver.system import RodSystem3D
 
 _AXES = "xyz"
 
@@ -116,19 +120,21 @@ def _natural(z):
             twist_angle(z, g, h))
 
 
-class Structure3D:
+class Structure3D(ConstrainedStructure):
     """Discrete elastic rods in 3-D: positions (x, y, z) per node, one twist angle per edge.
 
     The full state vector is ``3 n_nodes`` positions (m) then ``n_edges`` twists (rad).
-    Provides the problem interface of the path followers (docs/problem-interface.md).
+    Provides the problem interface of the path followers (`solver.problem.PushProblem`,
+    docs/problem-interface.md); the bookkeeping of nodes, supports and shared displacements
+    is `solver.constraints.ConstrainedStructure`'s.
     """
 
     dim = 3
     component_names = "xyz"
+    component_choices = "a non-empty subset of 'xyz' such as 'xz'"
 
     def __init__(self):
-        self.rods: list[Rod3D] = []
-        self._positions: list[np.ndarray] = []
+        super().__init__()
         self._tangents: list[np.ndarray] = []
         self._directors: list[np.ndarray] = []
         self._lengths: list[np.ndarray] = []
@@ -138,25 +144,11 @@ class Structure3D:
         self._pairs: dict = {}
         self._clamp_frames: list[tuple[np.ndarray, np.ndarray]] = []
         self._clamped: set[int] = set()
-        self._fixed: dict[int, set[int]] = {}
-        self._merges: list[tuple[int, int]] = []
-        self._cache = None
 
     # ------------------------------------------------------------------ sizes
     @property
-    def n_nodes(self) -> int:
-        return int(self.rods[-1].nodes[-1]) + 1 if self.rods else 0
-
-    @property
     def n_edges(self) -> int:
         return int(self.rods[-1].edges[-1]) + 1 if self.rods else 0
-
-    @property
-    def reference_positions(self) -> np.ndarray:
-        """(n_nodes, 3) stress-free node positions, m."""
-        if not self._positions:
-            return np.zeros((0, 3))
-        return np.concatenate(self._positions, axis=0)
 
     def _node_position(self, node):
         rod, i = self._rod_of(node)
@@ -297,16 +289,6 @@ class Structure3D:
         nat = _natural(_frame_pair(ta, da, tb, db, sa, sb))
         return (int(rod_a.edges[ja]), sa, int(rod_b.edges[jb]), sb, *ks, *nat)
 
-    def _check_node(self, node, name="node"):
-        if isinstance(node, (bool, np.bool_)) or not isinstance(node, (int, np.integer)):
-            raise ValueError(f"{name} must be an integer node index; got {node!r}")
-        node = int(node)
-        if self.n_nodes == 0:
-            raise ValueError(f"{name} {node}: the structure has no rods (add_rod first)")
-        if not 0 <= node < self.n_nodes:
-            raise ValueError(f"{name} {node} does not exist (valid: 0 .. {self.n_nodes - 1})")
-        return node
-
     def _rod_of(self, node):
         r = int(np.searchsorted(self._rod_starts(), node, side="right")) - 1
         if r < 0 or not node <= self.rods[r].nodes[-1]:
@@ -316,13 +298,7 @@ class Structure3D:
 
     def fix(self, node, components="xyz"):
         """Hold the displacement of ``node`` at zero in any subset of "x", "y", "z"."""
-        node = self._check_node(node)
-        if (not isinstance(components, str) or not components
-                or any(c not in _AXES for c in components) or len(set(components)) != len(components)):
-            raise ValueError(f"components must be a non-empty subset of 'xyz' such as 'xz'; "
-                             f"got {components!r}")
-        self._fixed.setdefault(node, set()).update(_AXES.index(c) for c in components)
-        self._cache = None
+        self._fix(node, components)
 
     def clamp(self, node, toward):
         """Hold the position, tangent and twist of the rod at exactly ``node``; the tangent
@@ -331,8 +307,8 @@ class Structure3D:
         The clamp is a fixed frame at the node coupled to each adjacent edge by bending and
         twisting over that edge's half length (the part of the node's Voronoi region on the
         edge's side), so that the clamped end of a cantilever is at the node itself."""
-        node = self._check_node(node)
-        toward = self._check_node(toward, "toward")
+        node = self.check_node(node)
+        toward = self.check_node(toward, "toward")
         rod, i = self._rod_of(node)
         rod_t, it = self._rod_of(toward)
         if rod_t is not rod or abs(it - i) != 1:
@@ -379,8 +355,8 @@ class Structure3D:
         stay mirror-symmetric joins in both orders, ``joint(a, b)`` and ``joint(b, a)`` (as
         `units.frame3d.Mesh3D.bond` does). Rods running side by side from a common end node
         (a fold of the two coupled edges) are coupled frame to frame."""
-        a = self._check_node(node_a, "node_a")
-        b = self._check_node(node_b, "node_b")
+        a = self.check_node(node_a, "node_a")
+        b = self.check_node(node_b, "node_b")
         if a == b:
             raise ValueError(f"cannot joint node {a} to itself")
         rod_a, ia = self._rod_of(a)
@@ -408,39 +384,15 @@ class Structure3D:
 
     def tie(self, node_a, node_b, method="exact"):
         """Bond two nodes: equal displacements (orientations stay independent; see `joint`)."""
-        a = self._check_node(node_a, "node_a")
-        b = self._check_node(node_b, "node_b")
-        if a == b:
-            raise ValueError(f"cannot tie node {a} to itself")
-        if method != "exact":
-            raise ValueError(f"tie method must be 'exact' for 3-D rods; got {method!r}")
-        self._merges.append((a, b))
-        self._cache = None
+        super().tie(node_a, node_b, method)
 
-    def rigid(self, nodes):
-        """Make ``nodes`` translate together."""
-        if isinstance(nodes, (str, bytes)) or not hasattr(nodes, "__iter__"):
-            raise ValueError(f"rigid needs a list of node indices; got {nodes!r}")
-        nodes = [self._check_node(n, "rigid node") for n in nodes]
-        if len(nodes) < 2 or len(set(nodes)) != len(nodes):
-            raise ValueError("rigid needs at least two distinct nodes")
-        for a, b in zip(nodes[:-1], nodes[1:]):
-            self._merges.append((a, b))
-        self._cache = None
+    def _tie_other(self, a, b, method, stiffness):
+        raise ValueError(f"tie method must be 'exact' for 3-D rods; got {method!r}")
 
     # ------------------------------------------------------------------ problem interface
     def initial_state(self) -> np.ndarray:
         """The stress-free state q0 (3 n_nodes + n_edges,): positions (m), zero twists."""
         return np.concatenate([self.reference_positions.reshape(-1), np.zeros(self.n_edges)])
-
-    def node_dofs(self, node) -> np.ndarray:
-        """(3,) int64 indices into the state vector of ``node``'s x, y, z."""
-        node = int(node)
-        return np.array([3 * node, 3 * node + 1, 3 * node + 2], dtype=np.int64)
-
-    def positions_of(self, q) -> np.ndarray:
-        """(n_nodes, 3) node positions (m) held in the state ``q`` (a view)."""
-        return np.asarray(q)[: 3 * self.n_nodes].reshape(-1, 3)
 
     def twist_of(self, q) -> np.ndarray:
         """(n_edges,) twist angles (rad) held in the state ``q`` (a view)."""
@@ -450,38 +402,9 @@ class Structure3D:
         """{"twist": (n_edges,) rad}: recorded on a path besides positions."""
         return {"twist": self.twist_of(q)}
 
-    def scales(self):
-        """(length m, force N): the largest extent of the stress-free shape, and
-        EI1_max / length^2 (EI1: bending through the thickness)."""
-        if not self.rods:
-            raise ValueError("the structure has no rods")
-        X = self.reference_positions
-        length = float(np.max(np.ptp(X, axis=0)))
-        if not length > 0.0:
-            length = float(max(np.max(np.abs(X)), 1e-300))
-        EI = max(float(np.max(r.EI1)) for r in self.rods)
-        return length, EI / length**2
-
-    def min_thickness(self) -> float:
-        """The smallest section thickness of any rod, m."""
-        return min(float(np.min(rod.thickness)) for rod in self.rods)
-
-    def supernodes(self):
-        """Node -> representative of the group of nodes that share displacements."""
-        uf = UnionFind(self.n_nodes)
-        for a, b in self._merges:
-            uf.union(a, b)
-        return np.array([uf.find(i) for i in range(self.n_nodes)], dtype=np.int64)
-
-    def fixed_components(self, rep=None):
-        """(n_nodes, 3) bool: position component held by a support (shared by merged nodes)."""
-        if rep is None:
-            rep = self.supernodes()
-        fixed_rep = np.zeros((self.n_nodes, 3), dtype=bool)
-        for node, comps in self._fixed.items():
-            for c in comps:
-                fixed_rep[rep[node], c] = True
-        return fixed_rep[rep]
+    def _max_bending_stiffness(self) -> float:
+        """EI1_max (N m^2): bending through the thickness, the easy way."""
+        return max(float(np.max(r.EI1)) for r in self.rods)
 
     def model(self):
         """The model arrays of `solver.assembly3d` (cached until the structure changes)."""
@@ -519,26 +442,22 @@ class Structure3D:
             }
         return self._cache
 
-    def reduced_system(self, extra_fixed=None) -> RodSystem3D:
+    def reduced_system(self, extra_fixed=None, normalized=False) -> RodSystem3D:
         """A fresh system (reference frames at the stress-free state) with the DOFs ordered
         by reverse Cuthill–McKee over node groups and edge twists, so that positions and
         twists interleave along each rod, started where the envelope the factorisation
         works on is smallest (`solver.ordering`).
 
-        ``extra_fixed``: iterable of (node, component 0..2) held in addition to supports."""
+        ``extra_fixed``: iterable of (node, component 0..2) held in addition to supports.
+        ``normalized``: 3-D rods have no per-unit-modulus elements: the system is in
+        physical units whatever it says (``force_unit`` 1)."""
         model = self.model()
         n, ne = self.n_nodes, self.n_edges
-        rep = self.supernodes()
-        fixed = self.fixed_components(rep)
-        if extra_fixed:
-            for node, c in extra_fixed:
-                fixed[rep == rep[node], c] = True
+        rep, fixed = self._held(extra_fixed)
         uniq, group = np.unique(rep, return_inverse=True)
         n_groups = len(uniq) + ne  # node groups, then one group per edge twist
         group_of_full = np.concatenate([np.repeat(group, 3), len(uniq) + np.arange(ne)])
         dof_map0 = np.arange(3 * n + ne)
-        from snapmorph.solver.assembly3d import element_dofs3d
-
         sf, _, pf, _ = element_dofs3d(n, model["edge_nodes"], ne, model["pair_edges"], dof_map0)
         key = "group_order"
         order = model.get(key)
@@ -578,20 +497,11 @@ class Structure3D:
         node_map[:] = node_map[rep]
         if k == 0:
             raise ValueError("every degree of freedom is fixed: nothing to solve")
-        bandwidth = 0
-        for full in (sf, pf):
-            if full.shape[0] == 0:
-                continue
-            d = np.where(full >= 0, dof_map[np.maximum(full, 0)], -1)
-            big = np.iinfo(np.int64).max
-            hi = np.max(d, axis=1)
-            lo = np.min(np.where(d < 0, big, d), axis=1)
-            ok = hi >= 0
-            if ok.any():
-                bandwidth = max(bandwidth, int(np.max(hi[ok] - lo[ok])))
+        bw = bandwidth(*(np.where(full >= 0, dof_map[np.maximum(full, 0)], -1)
+                         for full in (sf, pf)))
         twist_length = np.concatenate(
             [np.maximum(r.width, r.thickness) for r in self.rods])
-        return RodSystem3D(model, dof_map, k, bandwidth, twist_length=twist_length)
+        return RodSystem3D(model, dof_map, k, bw, twist_length=twist_length)
 
     # ------------------------------------------------------------------ energy access
     def state(self, positions=None, twist=None) -> np.ndarray:
@@ -627,36 +537,30 @@ class Structure3D:
         """Push ``node`` along ``direction`` (x, y, z) until its displacement reaches
         ``distance`` (m), with the planar solver's path followers (`Structure.push`).
 
-        Returns a `solver.continuation.Path`: displacement (K,), force (K,), positions
+        Returns a `solver.path.Path`: displacement (K,), force (K,), positions
         (K, n_nodes, 3), twist (K, n_edges), status, stability counts, critical points."""
-        from snapmorph.solver.continuation import follow_displacement, follow_mgdc, make_control
-
-        control = make_control(self, node, direction, distance, method)
-        if method == "mgdc":
-            return follow_mgdc(self, control, **options)
-        return follow_displacement(self, control, **options)
+        return self._push(node, direction, distance, method, options)
 
     def solve_equilibrium(self, positions=None, node=None, direction=(0.0, 0.0, -1.0),
                           force=0.0, **options):
         """Newton from ``positions`` ((n_nodes, 3) m or a full state; default stress free) to
         the equilibrium under ``force`` (N) on ``node`` along ``direction`` (no load when
-        ``node`` is None), with the planar solver's `solver.continuation.equilibrium`.
+        ``node`` is None), with the planar solver's `solver.equilibrium.equilibrium`.
         Returns (positions (n_nodes, 3), info dict with the full "state")."""
-        from snapmorph.solver.continuation import equilibrium
-
-        return equilibrium(self, positions, node, direction, force, **options)
+        return self._solve_equilibrium(positions, node, direction, force, options)
 
     def relax(self, q=None, moments=(), ramp=1, tol=1e-8, max_iter=100):
-        """Minimise the energy from the state ``q`` (default: stress free) by damped Newton
-        (banded Newton where K is positive definite, else a dense Levenberg–Marquardt shift;
-        every step must lower the energy), optionally under dead couples ``moments`` =
-        [(node_a, node_b, M (N m), axis (3,))], each on the edge from node_a to node_b, which
-        must turn in the plane normal to the axis. ``ramp``: the couples and the natural
-        curvatures and twists are raised to their values in this many equal stages (a
-        homotopy through equilibria). The reference frames are carried along after every
-        step. Returns (q, info dict)."""
-        from snapmorph.solver.banded import band_to_dense
-
+        """Minimise the energy from the state ``q`` (default: stress free) with the solver's
+        energy descent (`solver.descent.descend`, the Levenberg–Marquardt rule: banded Newton
+        on K + mu I, mu raised until it is positive definite and the step, at most a tenth
+        of the structure's size, lowers the energy), optionally under dead couples
+        ``moments`` = [(node_a, node_b, M (N m), axis (3,))], each on the edge from node_a to
+        node_b, which must turn in the plane normal to the axis. ``ramp``: the couples and
+        the natural curvatures and twists are raised to their values in this many equal
+        stages (a homotopy through equilibria). The reference frames are carried along after
+        every step. Converged when the residual is below ``tol`` x the force scale or the
+        last full Newton step below 1e-11 x the size. Returns (q, info dict); RuntimeError
+        when a stage does not converge in ``max_iter`` steps."""
         q = self.initial_state() if q is None else self.state(self.positions_of(q),
                                                               self.twist_of(q))
         if isinstance(ramp, (bool, np.bool_)) or not isinstance(ramp, (int, np.integer)) \
@@ -668,83 +572,61 @@ class Structure3D:
         sysm.pair_params = np.array(sysm.pair_params, copy=True)
         loads = []
         for a, b, M, axis in moments:
-            a = self._check_node(a, "moment node_a")
-            b = self._check_node(b, "moment node_b")
+            a = self.check_node(a, "moment node_a")
+            b = self.check_node(b, "moment node_b")
             ax = _finite_array(axis, "moment axis", "a direction")
             if ax.shape != (3,) or not np.linalg.norm(ax) > 0:
                 raise ValueError(f"moment axis must be a non-zero 3-vector; got {axis!r}")
             M = float(_finite_array(M, "moment M", "N m"))
             loads.append((a, b, M, ax / np.linalg.norm(ax)))
-
-        def evaluate(qv, f):
-            """Energy; leaves the load-including gradient in sysm.grad and K in sysm.band."""
-            E = sysm.evaluate(qv)
-            X = self.positions_of(qv)
-            for a, b, M, ax in loads:
-                ge = np.empty(3)
-                he = np.empty((3, 3))
-                E += tip_moment_terms(X[b] - X[a], f * M, ax, ge, he)
-                dofs = [(-1.0, r) for r in sysm.dof_map[3 * a: 3 * a + 3]]
-                dofs += [(1.0, r) for r in sysm.dof_map[3 * b: 3 * b + 3]]
-                for i, (s_i, r_i) in enumerate(dofs):
-                    if r_i < 0:
-                        continue
-                    sysm.grad[r_i] += s_i * ge[i % 3]
-                    for j, (s_j, r_j) in enumerate(dofs):
-                        if 0 <= r_j <= r_i:
-                            sysm.band[r_i - r_j, r_j] += s_i * s_j * he[i % 3, j % 3]
-            return E
-
         total_it = 0
-        E = 0.0
-        g = np.zeros(sysm.n)
+        loaded = _Couples(sysm, loads)
         for stage in range(1, ramp + 1):
-            f = stage / ramp
+            loaded.fraction = f = stage / ramp
             sysm.pair_params[:, 3:6] = f * natural
-            E = evaluate(q, f)
-            g = sysm.grad[: sysm.n].copy()
-            shift = 0.0
-            du_max = np.inf
-            for _ in range(max_iter):
-                # converged: force residual below tol x force scale, or the last full Newton
-                # step moved nothing by more than 1e-11 x the size (stiff stretching terms
-                # leave a round-off residual)
-                if np.max(np.abs(g)) <= tol * fscale or du_max <= 1e-11 * length:
-                    break
-                K = None
-                mu = 0.0
-                if shift == 0.0 and sysm.factor() and sysm.negative_eigenvalues == 0:
-                    du = sysm.solve(-g)
-                else:
-                    evaluate(q, f)
-                    K = band_to_dense(sysm.band)
-                while True:
-                    if K is not None:
-                        eig_min = float(np.linalg.eigvalsh(K)[0])
-                        diag = float(np.max(np.abs(np.diag(K))))
-                        mu = max(shift, -1.01 * eig_min + 1e-9 * diag if eig_min <= 0 else 0.0)
-                        du = np.linalg.solve(K + mu * np.eye(K.shape[0]), -g)
-                    step = min(1.0, 0.1 * length / max(float(np.max(np.abs(du))), 1e-300))
-                    q_try = q.copy()
-                    sysm.increment(q_try, du, step)
-                    E_try = evaluate(q_try, f)
-                    if E_try <= E + 1e-12 * abs(E):
-                        break
-                    if K is None:
-                        evaluate(q, f)
-                        K = band_to_dense(sysm.band)
-                        diag = float(np.max(np.abs(np.diag(K))))
-                    shift = max(4.0 * shift, 1e-8 * diag)
-                    if shift > 1e12 * diag:
-                        raise RuntimeError("relax: no energy decrease along the gradient")
-                du_max = float(np.max(np.abs(du))) if (mu == 0.0 and step == 1.0) else np.inf
-                shift = 0.25 * shift if K is not None and shift > 1e-6 * diag else 0.0
-                q = q_try
-                sysm.accept(q)
-                E = evaluate(q, f)
-                g = sysm.grad[: sysm.n].copy()
-                total_it += 1
-            else:
+            try:
+                total_it += descend(loaded, q, tol * fscale, 1e-11 * length, max_iter,
+                                    max_move=0.1 * length, carry_frames=True)
+            except ConvergenceError as exc:
+                if "energy decrease" in str(exc):
+                    raise RuntimeError("relax: no energy decrease along the gradient") from exc
                 raise RuntimeError(f"relax did not converge in {max_iter} iterations at stage "
-                                   f"{stage} of {ramp}")
-        return q, {"iterations": total_it, "energy": E, "residual": float(np.max(np.abs(g)))}
+                                   f"{stage} of {ramp}") from exc
+        E = loaded.evaluate(q)
+        return q, {"iterations": total_it, "energy": E,
+                   "residual": float(np.max(np.abs(sysm.grad[: sysm.n])))}
+
+
+class _Couples:
+    """A `RodSystem3D` with dead couples on edges (`Structure3D.relax`): ``loads`` =
+    [(node_a, node_b, M (N m), unit axis)], applied at ``fraction`` of their moments; every
+    other member is the system's own."""
+
+    def __init__(self, system, loads):
+        self.system = system
+        self.loads = loads
+        self.fraction = 1.0
+
+    def __getattr__(self, name):
+        return getattr(self.system, name)
+
+    def evaluate(self, q):
+        """Energy (J) with the couples' potential; leaves the load-including gradient in
+        the system's ``grad`` and K in its ``band``."""
+        sysm = self.system
+        E = sysm.evaluate(q)
+        X = np.asarray(q)[: 3 * sysm.n_nodes].reshape(-1, 3)
+        for a, b, M, ax in self.loads:
+            ge = np.empty(3)
+            he = np.empty((3, 3))
+            E += tip_moment_terms(X[b] - X[a], self.fraction * M, ax, ge, he)
+            dofs = [(-1.0, r) for r in sysm.dof_map[3 * a: 3 * a + 3]]
+            dofs += [(1.0, r) for r in sysm.dof_map[3 * b: 3 * b + 3]]
+            for i, (s_i, r_i) in enumerate(dofs):
+                if r_i < 0:
+                    continue
+                sysm.grad[r_i] += s_i * ge[i % 3]
+                for j, (s_j, r_j) in enumerate(dofs):
+                    if 0 <= r_j <= r_i:
+                        sysm.band[r_i - r_j, r_j] += s_i * s_j * he[i % 3, j % 3]
+        return E

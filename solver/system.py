@@ -1,7 +1,11 @@
-"""A constrained, assembled problem: the element arrays, one DOF map and its band storage.
+"""Constrained, assembled problems: what the path followers work on (`solver.problem.System`).
 
-`ReducedSystem` is what the path followers work on: evaluate the energy, gradient and
-tangent stiffness at positions ``q``, factorise, and solve. It owns no physics of its own.
+`BandedSystem` holds what every rod model shares: a DOF map (full -> reduced, -1 held), the
+reduced gradient and tangent stiffness in band storage, the banded LDL^T factorisation with
+its inertia count (and a dense pivoting fallback), solves and increments. `ReducedSystem`
+(planar rods) and `RodSystem3D` (3-D rods with twist, carrying reference frames from state
+to state) add the assembly and the fused compiled iterations of their model (`solver.iteration`).
+They own no physics of their own.
 """
 
 from __future__ import annotations
@@ -9,36 +13,44 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from snapmorph.solver.assembly import apply_increment, assemble_system, element_dofs
+from snapmorph.solver.assembly import assemble_system, element_dofs
+from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws, element_dofs3d
 from snapmorph.solver.banded import (band_to_dense, envelope_heights, ldlt_factor_envelope,
-                           ldlt_solve_envelope)
-from snapmorph.solver.iteration import mgdc_iteration, newton_iteration
+                                     ldlt_solve_envelope)
+from snapmorph.solver.frames3d import canonical_twist_offset, reference_twist, transport_frames
+from snapmorph.solver.iteration import (mgdc_iteration, mgdc_iteration3d, newton_iteration,
+                                        newton_iteration3d)
 
 # A pivot smaller than this times the largest diagonal entry means K is numerically singular
 # for LDL^T without pivoting; the dense pivoting fallback then takes over.
 PIVOT_TOL = 1e-13
 
 
-class ReducedSystem:
-    """K_red = W^T K W and the reduced gradient for one set of constraints.
+class BandedSystem:
+    """K_red = W^T K W and the reduced gradient for one set of constraints, in band storage.
 
-    ``dof_map`` (2 n_nodes,) maps full DOFs to reduced DOFs (-1 = fixed/prescribed).
-    """
+    ``dof_map`` (n_full,) int: full -> reduced DOF (-1 held); ``element_dofs``: the reduced
+    DOFs of every element's local coordinates (arrays (n_elements, k), -1 held), which fix
+    the factor's envelope; ``dof_scale`` (n_full,): dq_full = dof_scale * du_reduced (None:
+    all 1, reduced DOFs are the full ones); ``order``: the band's memory order."""
 
-    def __init__(self, elements, dof_map, n_reduced, bandwidth):
-        self.elements = elements
+    def __init__(self, dof_map, n_reduced, bandwidth, element_dofs, dof_scale=None, order="C"):
         self.dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
-        self.dofs = element_dofs(elements, self.dof_map)
-        # one full DOF per reduced DOF, to read reduced values off full positions
+        # (no scaling: reduced DOFs are full ones, and the per-step conversions skip it)
+        self._scaled = dof_scale is not None
+        self.dof_scale = (np.asarray(dof_scale, dtype=float) if self._scaled
+                          else np.ones(self.dof_map.shape[0]))
+        # one full DOF per reduced DOF, to read reduced values off full states
         free = np.flatnonzero(self.dof_map >= 0)
         self.representative = np.empty(int(n_reduced), dtype=np.int64)
         self.representative[self.dof_map[free]] = free
         self.n = int(n_reduced)
         self.bandwidth = int(bandwidth)
-        self.band = np.zeros((self.bandwidth + 1, max(self.n, 1)))
+        self.band = np.zeros((self.bandwidth + 1, max(self.n, 1)), order=order)
         self._band_copy = np.empty_like(self.band)
-        # the factor's envelope: its columns' extents, fill included (no scans per solve)
-        self.heights = envelope_heights(self.band.shape[1], *self.dofs)
+        # the factor's envelope (fill included): assembly clears, the factor and the solves
+        # walk only that part of the band (the rest stays zero; no scans per solve)
+        self.heights = envelope_heights(self.band.shape[1], *element_dofs)
         self.grad = np.zeros(max(self.n, 1))
         self.grad_full = np.zeros(self.dof_map.shape[0])
         self._work = np.zeros((max(self.n, 1), 3))
@@ -51,11 +63,8 @@ class ReducedSystem:
         self.force_unit = 1.0
 
     def evaluate(self, q):
-        """Assemble energy (J), gradients (N) and K (N/m) at positions ``q`` (m)."""
-        self.energy = assemble_system(
-            q, self.elements, self.dofs, self.band, self.grad, self.grad_full
-        )
-        return self.energy
+        """Assemble energy (J), gradients (N) and K (N/m) at the full state ``q``."""
+        raise NotImplementedError
 
     def factor(self):
         """Factorise the assembled K; records the number of negative eigenvalues.
@@ -84,6 +93,10 @@ class ReducedSystem:
         self.factor_ok = True
         return True
 
+    def use_band_factor(self):
+        """`solve` with the LDL^T factor the caller has made in ``band`` itself."""
+        self._dense_lu = None
+
     def solve(self, rhs):
         """Solve K X = rhs for rhs (n,) or (n, m); returns a new array."""
         b = np.array(rhs, dtype=float, copy=True)
@@ -100,18 +113,16 @@ class ReducedSystem:
 
         Returns (status, residual_max, du_max): status 0 converged (K at q factorised),
         1 LDL^T failed (nothing done: use evaluate/factor/solve), 2 q updated."""
-        status, neg, r_max, du_max, energy = newton_iteration(
-            q, lam, P, self.elements, self.dofs, self.dof_map, self.band, self.heights,
-            self.grad, self.grad_full, self._work, PIVOT_TOL, tol_force)
+        status, neg, r_max, du_max, energy = self._newton_iteration(
+            q, lam, P, *self._kernel_args, tol_force)
         self._after_fused(status, neg, energy)
         return status, r_max, du_max
 
     def fused_mgdc(self, q, lam, P, uP1, tol_force):
         """One fused MGDC corrector iteration; updates q. Returns (status, residual_max,
         du_max, dlam) with the statuses of `fused_newton`."""
-        status, neg, r_max, du_max, dl, energy = mgdc_iteration(
-            q, lam, P, uP1, self.elements, self.dofs, self.dof_map, self.band, self.heights,
-            self.grad, self.grad_full, self._work, PIVOT_TOL, tol_force)
+        status, neg, r_max, du_max, dl, energy = self._mgdc_iteration(
+            q, lam, P, uP1, *self._kernel_args, tol_force)
         self._after_fused(status, neg, energy)
         return status, r_max, du_max, dl
 
@@ -129,21 +140,162 @@ class ReducedSystem:
 
     def accept(self, q):
         """Hook called by the path followers after every accepted state (and after a
-        reroute): nothing to carry along for planar rods (3-D rods update their frames)."""
+        reroute): nothing to carry along here (3-D rods update their frames)."""
 
-    def step_norm(self, q_new, q_old):
-        """Size of a step between two full states (m), as the path followers measure it."""
-        return float(np.linalg.norm(q_new - q_old))
+    def reset_frames(self):
+        """Back to the frames of a fresh system: nothing to do here (3-D rods)."""
+
+    def state_fields(self, q) -> dict:
+        """Per-state arrays the system records on a path instead of the structure's: none
+        here (3-D rods: the twists in the canonical convention)."""
+        return {}
 
     def reduced(self, q):
-        """Reduced DOF values of the full vector ``q``."""
-        return q[self.representative]
+        """Reduced DOF values of the full state ``q``."""
+        rep = self.representative
+        if self._scaled:
+            return np.asarray(q)[rep] / self.dof_scale[rep]
+        return np.asarray(q)[rep]
+
+    def step_norm(self, q_new, q_old):
+        """Size of a step between two full states in the reduced DOFs' units (m), as the
+        path followers measure it."""
+        step = np.asarray(q_new) - q_old
+        return float(np.linalg.norm(step / self.dof_scale if self._scaled else step))
 
     def increment(self, q, du, scale=1.0):
-        """Apply a reduced increment to the full positions in place."""
-        apply_increment(q, self.dof_map, du, scale)
+        """Apply a reduced increment to the full state in place (tied DOFs move together)."""
+        apply_scaled_increment(q, self.dof_map, self.dof_scale, np.asarray(du, dtype=float),
+                               float(scale))
 
     def dense_stiffness(self, q):
         """Dense reduced K at ``q`` (for tests and eigen-analysis)."""
         self.evaluate(q)
         return band_to_dense(self.band)
+
+
+class ReducedSystem(BandedSystem):
+    """The system of planar rods: ``elements`` of `solver.assembly`, ``dof_map``
+    (2 n_nodes + 2 n_ghosts,) full -> reduced DOF."""
+
+    def __init__(self, elements, dof_map, n_reduced, bandwidth):
+        dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
+        self.elements = elements
+        self.dofs = element_dofs(elements, dof_map)
+        super().__init__(dof_map, n_reduced, bandwidth, self.dofs)
+        # the fused kernels, and their arguments after (q, lam, P[, uP1]) but the last
+        self._newton_iteration, self._mgdc_iteration = newton_iteration, mgdc_iteration
+        self._kernel_args = (self.elements, self.dofs, self.dof_map, self.band, self.heights,
+                             self.grad, self.grad_full, self._work, PIVOT_TOL)
+
+    def evaluate(self, q):
+        """Assemble energy (J), gradients (N) and K (N/m) at positions ``q`` (m)."""
+        self.energy = assemble_system(
+            q, self.elements, self.dofs, self.band, self.grad, self.grad_full
+        )
+        return self.energy
+
+
+class RodSystem3D(BandedSystem):
+    """The system of 3-D rods: positions and edge twists, with reference frames.
+
+    ``model``: dict of the model arrays of `solver.assembly3d` (copied: the reference frames
+    of a fresh system always start at the structure's stress-free frames); ``dof_map``
+    (3 n_nodes + n_edges,) full -> reduced DOF (-1 held). ``twist_length`` (n_edges,) m:
+    a reduced twist DOF is twist_length * theta, a length like the positions, so that the
+    path followers' step norms and tolerances weigh rotations and displacements alike
+    (default 1: reduced twists in rad). The reference frames are carried from accepted state
+    to accepted state by ``accept(q)``.
+    """
+
+    def __init__(self, model, dof_map, n_reduced, bandwidth, twist_length=None):
+        self.n_nodes = int(model["n_nodes"])
+        self.n_edges = int(model["stretch_params"].shape[0])
+        self.edge_nodes = model["edge_nodes"]
+        self.src_t = np.array(model["src_t"], dtype=float, copy=True)
+        self.src_d = np.array(model["src_d"], dtype=float, copy=True)
+        self._stress_free = (self.src_t.copy(), self.src_d.copy())
+        self.stretch_params = model["stretch_params"]
+        self.pair_edges = model["pair_edges"]
+        self.pair_signs = model["pair_signs"]
+        self.pair_params = model["pair_params"]
+        dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
+        self.element_dofs = element_dofs3d(self.n_nodes, self.edge_nodes, self.n_edges,
+                                           self.pair_edges, dof_map)
+        dof_scale = np.ones(dof_map.shape[0])
+        if twist_length is not None:
+            dof_scale[3 * self.n_nodes:] = 1.0 / np.asarray(twist_length, dtype=float)
+        sf, sr, pf, pr = self.element_dofs
+        super().__init__(dof_map, n_reduced, bandwidth, (sr, pr), dof_scale, order="F")
+        # the arrays the compiled kernels read (src_t, src_d are updated in place by accept)
+        # and the frames' jets, written at every assembly
+        n_frames = self.edge_nodes.shape[0]
+        self.model_arrays = (self.n_nodes, self.edge_nodes, self.src_t, self.src_d,
+                             self.stretch_params, self.pair_edges, self.pair_signs,
+                             self.pair_params, sf, sr, pf, pr, np.empty((n_frames, 9)),
+                             np.empty((n_frames, 9, 4)), np.empty((n_frames, 9, 4, 4)))
+        self._reference_twist = None
+        # the fused kernels, and their arguments after (q, lam, P[, uP1]) but the last
+        self._newton_iteration, self._mgdc_iteration = newton_iteration3d, mgdc_iteration3d
+        self._kernel_args = (self.model_arrays, self.dof_map, self.dof_scale, self.band,
+                             self.heights, self.grad, self.grad_full, self._work, PIVOT_TOL)
+
+    def evaluate(self, q):
+        """Assemble energy (J), gradients (N, N m) and K at the state ``q``."""
+        m = self.model_arrays
+        self.energy = assemble_system3d_ws(
+            np.ascontiguousarray(q, dtype=float), m[0], m[1], m[2], m[3], m[4], m[5], m[6],
+            m[7], m[8], m[9], m[10], m[11], self.dof_scale, self.band, self.grad,
+            self.grad_full, m[12], m[13], m[14], self.heights)
+        return self.energy
+
+    def _unit_tangents(self, q):
+        """(n_edges, 3) unit tangents of the rods' edges at the state ``q``."""
+        X = np.asarray(q[: 3 * self.n_nodes]).reshape(-1, 3)
+        en = self.edge_nodes[: self.n_edges]
+        e = X[en[:, 1]] - X[en[:, 0]]
+        return e / np.linalg.norm(e, axis=1)[:, None]
+
+    def accept(self, q):
+        """Carry the reference frames to the state ``q`` by time-parallel transport (the
+        material frames at q are unchanged: only the source of the transport moves) and
+        record the reference twist of every bending pair of rod edges (rad)."""
+        ne = self.n_edges
+        t_new = self._unit_tangents(q)
+        self.src_d[:ne] = transport_frames(np.ascontiguousarray(self.src_t[:ne]),
+                                           self.src_d[:ne], t_new)
+        self.src_t[:ne] = t_new
+        self._reference_twist = None
+
+    def reset_frames(self):
+        """Back to the stress-free reference frames (as a fresh system): a state handed in
+        from outside (its twists canonical, see `state_fields`) then means what it says."""
+        t0, d0 = self._stress_free
+        self.src_t[:] = t0
+        self.src_d[:] = d0
+        self._reference_twist = None
+
+    def state_fields(self, q):
+        """{"twist": (n_edges,) rad}: the twists of the state ``q`` in the canonical
+        convention (`solver.frames3d.canonical_twist_offset`), which any fresh system (or one
+        after `reset_frames`) reads as the same material frames. Recorded on paths, so that a
+        path's states can be restarted from by another system."""
+        n3, ne = 3 * self.n_nodes, self.n_edges
+        t = self._unit_tangents(q)
+        d_ref = transport_frames(np.ascontiguousarray(self.src_t[:ne]),
+                                 np.ascontiguousarray(self.src_d[:ne]), t)
+        t0, d0 = self._stress_free
+        off = canonical_twist_offset(t0[:ne], d0[:ne], t, d_ref)
+        return {"twist": np.asarray(q[n3:n3 + ne]) - off}
+
+    @property
+    def reference_twist(self):
+        """(n_pairs,) rad: the reference twist of every pair of consecutive rod edges at the
+        last accepted state (NaN for pairs with a clamp frame or across a joint)."""
+        if self._reference_twist is None:
+            out = np.full(self.pair_edges.shape[0], np.nan)
+            rods = ((self.pair_edges[:, 0] < self.n_edges) & (self.pair_edges[:, 1] < self.n_edges)
+                    & (self.pair_signs[:, 0] > 0) & (self.pair_signs[:, 1] > 0))
+            out[rods] = reference_twist(self.src_t, self.src_d, self.pair_edges[rods])
+            self._reference_twist = out
+        return self._reference_twist

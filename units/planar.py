@@ -36,7 +36,7 @@ import numpy as np
 import dataclasses
 import inspect
 
-from snapmorph.solver.continuation import ConvergenceError
+from snapmorph.solver.problem import ConvergenceError
 from snapmorph.solver.stability import state_stability
 from snapmorph.solver.states import DisplacementProbe, refine_maximum, zero_force_displacement
 from snapmorph.units import status as statuses
@@ -287,7 +287,8 @@ def _push_options(structure, push, deadline):
     per-step stop test otherwise."""
     if deadline is None:
         return push, None
-    from snapmorph.solver.continuation import follow_displacement, follow_mgdc
+    from snapmorph.solver.displacement import follow_displacement
+    from snapmorph.solver.mgdc import follow_mgdc
 
     driver = follow_mgdc if push["method"] == "mgdc" else follow_displacement
     if "time_limit" in inspect.signature(driver).parameters:

@@ -219,7 +219,7 @@ def _zero_state(st, path, Q, i, node, probe):
         if hasattr(st, "solve_equilibrium"):
             pos, info = st.solve_equilibrium(q, node=None)
         else:
-            from snapmorph.solver.continuation import equilibrium
+            from snapmorph.solver.equilibrium import equilibrium
 
             pos, info = equilibrium(st, q, None, DOWN, 0.0)
         return np.array(pos), np.array(info["state"])
@@ -437,42 +437,16 @@ def descend(st, q, tol=1e-9, max_iter=400):
     steps succeed: Levenberg–Marquardt on the banded K). Leaves the reference frames of a
     fresh system, so that the result is a state as `Structure3D.solve_equilibrium` returns
     it. Raises RuntimeError when it does not converge."""
+    from snapmorph.solver.descent import descend as energy_descent
+
     system = st.reduced_system()
     length, fscale = st.scales()
     q = np.array(q, dtype=float)
-    n = system.n
-    E = system.evaluate(q)
-    g = np.array(system.grad[:n])
-    diag = float(np.max(np.abs(system.band[0, :n])))
-    mu = 0.0
-    du_last = np.inf  # the last step, when it was a full Newton step (else inf)
-    for _ in range(max_iter):
-        # converged: force residual below tol x force scale, or the last full Newton step
-        # moved nothing by more than 1e-11 x the size (the stiff stretching terms leave a
-        # round-off residual), as `Structure3D.relax`
-        if float(np.max(np.abs(g))) <= tol * fscale or du_last <= 1e-11 * length:
-            return q
-        while True:
-            system.evaluate(q)
-            if mu:
-                system.band[0, :n] += mu
-            if system.factor() and system.negative_eigenvalues == 0:
-                du = system.solve(-g)
-                big = float(np.max(np.abs(du)))
-                step = min(1.0, 0.05 * length / big) if big > 0 else 1.0
-                q_try = q.copy()
-                system.increment(q_try, du, step)
-                E_try = system.evaluate(q_try)
-                if E_try <= E + 1e-12 * abs(E):
-                    break
-            mu = max(4.0 * mu, 1e-8 * diag)
-            if mu > 1e12 * diag:
-                raise RuntimeError("descend: no energy decrease along the gradient")
-        du_last = big if (mu == 0.0 and step == 1.0) else np.inf
-        q, E = q_try, E_try
-        g = np.array(system.grad[:n])
-        mu = 0.25 * mu if mu > 1e-10 * diag else 0.0
-    raise RuntimeError(f"descend did not converge in {max_iter} iterations")
+    # converged: force residual below tol x force scale, or the last full Newton step
+    # moved nothing by more than 1e-11 x the size (the stiff stretching terms leave a
+    # round-off residual), as `Structure3D.relax`
+    energy_descent(system, q, tol * fscale, 1e-11 * length, max_iter, max_move=0.05 * length)
+    return q
 
 
 def relax_released(st, q):

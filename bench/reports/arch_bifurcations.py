@@ -5,15 +5,14 @@ The clamped cosine arch (l = 0.1 m, t = 0.5 mm) with its centre clamped and with
 rotation free: F_max, F_min in EI h / l^3 on the followed and the primary path, the located
 bifurcations, and F_max with a 1e-4 t imperfection in the critical mode.
 """
-from snapmorph.solver import reference_models
 from snapmorph.solver.stability import seed_imperfection
-from tests.solver.models import first_peak_index
+from validation.arch import clamped_arch, first_peak_index
 
 T, L_SPAN = 0.5e-3, 0.1
 for ht in [6, 10, 20]:
     h = ht * T
     for clamped in [True, False]:
-        st, mid, EI = reference_models.clamped_arch(h, centre_clamped=clamped)
+        st, mid, EI = clamped_arch(h, centre_clamped=clamped)
         unit = EI * h / L_SPAN**3
         follow = st.push(mid, (0, -1), 2.2 * h, method="mgdc", branch="follow")
         primary = st.push(mid, (0, -1), 2.2 * h, method="displacement", branch="primary")

@@ -1,10 +1,9 @@
 """Report script behind the figures quoted in the issue notes; run from the repository root
 with PYTHONPATH=. .venv/bin/python bench/reports/solver_validation.py."""
 import numpy as np
-from tests.solver.test_elastica import cantilever_path, max_relative_errors
-from tests.solver.test_column import column, P_CR, L
-from tests.solver.models import first_peak_index as first_peak
-from tests.solver.test_arch import arch_path
+from validation.arch import arch_path, first_peak_index as first_peak
+from validation.cantilever import cantilever_path, max_relative_errors
+from validation.column import column, P_CR, L
 errs=[]
 for n in [26,51,101,201]:
     p=cantilever_path(n, steps=20)

@@ -9,16 +9,7 @@ approximate closed-form values for large h/t).
 import numpy as np
 import pytest
 
-from tests.solver.models import clamped_arch, first_peak_index
-
-T, L_SPAN = 0.5e-3, 0.1
-
-
-def arch_path(h_over_t, method="mgdc", n_nodes=101):
-    h = h_over_t * T
-    st, mid, EI = clamped_arch(h, n_nodes=n_nodes)
-    path = st.push(mid, (0.0, -1.0), 2.2 * h, method=method)
-    return path, h, EI * h / L_SPAN**3
+from validation.arch import arch_path, first_peak_index
 
 
 @pytest.mark.parametrize("h_over_t", [6, 10, 20])

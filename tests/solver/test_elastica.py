@@ -8,58 +8,8 @@ Solved here by shooting on psi'(0) with a tight-tolerance ODE integrator.
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
-from snapmorph.solver import Structure
-from tests.solver.models import clamped_rod_nodes
-
-L, T, W = 1.0, 5e-4, 1e-2
-E = 12.0 / (W * T**3)  # EI = 1 N m^2
-EI = 1.0
-
-
-def elastica_deflection(alpha):
-    """Tip deflection / L of the exact elastica for alpha = P L^2 / EI."""
-
-    def shoot(c):
-        sol = solve_ivp(
-            lambda s, y: [y[1], -alpha * np.cos(y[0]), np.sin(y[0])],
-            [0.0, 1.0],
-            [0.0, c, 0.0],
-            rtol=1e-12,
-            atol=1e-14,
-        )
-        return sol.y[:, -1]
-
-    c = brentq(lambda c: shoot(c)[1], 1e-12, alpha * (1 + 1e-9))
-    return shoot(c)[2]
-
-
-def cantilever_path(n_nodes, method="mgdc", **options):
-    s = clamped_rod_nodes(n_nodes, L)
-    st = Structure()
-    rod = st.add_rod(np.stack([s, np.zeros_like(s)], 1), width=W, thickness=T, E=E)
-    st.fix(0, "xz")
-    st.fix(1, "xz")
-    # tip: free horizontally and in rotation, pushed down; alpha = 10 at delta/L = 0.8106
-    return st.push(rod.nodes[-1], (0.0, -1.0), 0.8106 * L, method=method, **options)
-
-
-def max_relative_errors(path):
-    """Max relative error of the deflection at the DER forces, and of the force at the DER
-    deflections (via the local slope of the exact curve), over alpha in (0, 10]."""
-    keep = (path.force > 0.05) & (path.force * L**2 / EI <= 10.0)
-    d_err, f_err = [], []
-    for F, d in zip(path.force[keep][::3], path.displacement[keep][::3]):
-        alpha = F * L**2 / EI
-        exact = elastica_deflection(alpha) * L
-        slope = (elastica_deflection(alpha * 1.001) - elastica_deflection(alpha * 0.999)) * L / (
-            0.002 * alpha
-        )  # d(delta)/d(alpha)
-        d_err.append(abs(d - exact) / exact)
-        f_err.append(abs((d - exact) / slope) / alpha)
-    return max(d_err), max(f_err)
+from validation.cantilever import EI, L, cantilever_path, max_relative_errors
 
 
 def test_cantilever_matches_elastica_within_half_percent_at_100_nodes():

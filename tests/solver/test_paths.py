@@ -19,32 +19,8 @@ import numpy as np
 import pytest
 
 from snapmorph.solver import Structure
-from tests.solver.models import first_peak_index
-
-T, L_SPAN, W, E = 0.5e-3, 0.1, 5e-3, 2.2e9
+from validation.arch import E, L_SPAN, T, W, arch, first_peak_index
 BEAM = {6: (711.0, -338.0), 10: (732.0, -363.0), 20: (710.0, -356.0)}
-
-
-def arch(h_over_t, n_nodes, setup, centre=True, E=E, t=T, l=L_SPAN, w=W):
-    """The centre-clamped arch built as a user would. Returns (structure, mid, h, EI)."""
-    h = h_over_t * t
-    x = np.linspace(0.0, l, n_nodes)
-    z = 0.5 * h * (1 - np.cos(2 * np.pi * x / l))
-    st = Structure()
-    st.add_rod(np.stack([x, z], 1), width=w, thickness=t, E=E)
-    mid = n_nodes // 2
-    if setup == "fix":
-        for k in (0, 1, n_nodes - 2, n_nodes - 1):
-            st.fix(k, "xz")
-        if centre:
-            st.rigid([mid - 1, mid, mid + 1])
-    else:
-        st.clamp(0, toward=1)
-        st.clamp(n_nodes - 1, toward=n_nodes - 2)
-        if centre:
-            st.clamp(mid, toward=mid + 1, hold_position=False)
-    st.fix(mid, "x")
-    return st, mid, h, E * w * t**3 / 12
 
 
 def push_both(h_over_t, n_nodes, setup, centre=True):
@@ -136,7 +112,7 @@ def test_same_push_is_bit_identical_whatever_ran_before():
     # and in a fresh process
     code = (
         "import hashlib, sys; sys.path.insert(0, '.');"
-        "from tests.solver.test_paths import arch;"
+        "from validation.arch import arch;"
         "st, mid, h, _ = arch(20, 101, 'fix');"
         "p = st.push(mid, (0.0, -1.0), 2.2 * h, method='mgdc');"
         "print(hashlib.sha256(p.force.tobytes() + p.positions.tobytes()).hexdigest())"
@@ -179,6 +155,16 @@ def test_centre_rotation_free_asymmetric_snap_with_snap_back():
     assert abs(f_m / f_d - 1) < 0.01
 
 
+def mgdc_and_rig(h_over_t, n_nodes, setup):
+    """The arch with its centre free in rotation (x held) pushed to 2.2 h by MGDC and by
+    displacement control: (MGDC path, rig path, structure, h, EI)."""
+    st, mid, h, EI = arch(h_over_t, n_nodes, setup, centre=False)
+    mg = st.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
+    st, mid, h, EI = arch(h_over_t, n_nodes, setup, centre=False)
+    dc = st.push(mid, (0.0, -1.0), 2.2 * h, method="displacement")
+    return mg, dc, st, h, EI
+
+
 def travelled(path):
     """Sum of |dd| along a path, m: the push distance for a path that only advances."""
     return float(np.sum(np.abs(np.diff(path.displacement))))
@@ -193,10 +179,7 @@ def test_centre_rotation_free_fix_setup_goes_forward_to_the_target(h_over_t):
     # ever less stable branches, 748-20000 steps and F_min down to -13767 EI h / l^3
     # (issue 12). MGDC now leaves that branch and jumps on from the point as a
     # displacement-controlled rig does.
-    st, mid, h, EI = arch(h_over_t, 101, "fix", centre=False)
-    mg = st.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
-    st, mid, h, EI = arch(h_over_t, 101, "fix", centre=False)
-    dc = st.push(mid, (0.0, -1.0), 2.2 * h, method="displacement")
+    mg, dc, st, h, EI = mgdc_and_rig(h_over_t, 101, "fix")
     unit = EI * h / L_SPAN**3
     for p in (mg, dc):
         assert p.status == "ok", p.status
@@ -234,10 +217,7 @@ def test_centre_rotation_free_mgdc_goes_forward_and_agrees_with_the_rig(h_over_t
     # with d held, and meets the same first peak as the rig. (Before: fix set-up, 101
     # nodes, 748-20000 steps; clamp set-up, h/t = 6, 201 nodes: a tangent-plane "switch"
     # that fell back onto the unstable symmetric path, peak 710.5 where the rig sees 534.4.)
-    st, mid, h, EI = arch(h_over_t, n_nodes, setup, centre=False)
-    mg = st.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
-    st, mid, h, EI = arch(h_over_t, n_nodes, setup, centre=False)
-    dc = st.push(mid, (0.0, -1.0), 2.2 * h, method="displacement")
+    mg, dc, st, h, EI = mgdc_and_rig(h_over_t, n_nodes, setup)
     for p in (mg, dc):
         assert p.status == "ok", p.status
         assert p.displacement[-1] >= 2.2 * h * (1 - 1e-9)
@@ -270,7 +250,7 @@ def test_lateral_torsional_buckling_at_201_nodes_is_detected_and_located(method)
     # 3-D: measured before the driver rework, the 201-node strip ended "ok" on the buckled
     # branch with no critical point. The bifurcation must be found, located and switched
     # at the finite-EI2 corrected Prandtl load (0.1 % at 201 nodes).
-    from tests.solver.test_rods3d_validation import ltb_cantilever
+    from validation.strip3d import ltb_cantilever
 
     L = 0.1
     st, rod, EI1, EI2, GJ = ltb_cantilever(201, L)
@@ -311,22 +291,9 @@ def test_euler_column_with_clamps(method):
     assert np.abs(path.positions[-1, :, 1]).max() > 0.05 * L
 
 
-@pytest.mark.slow
-def test_unit_at_three_heights_mgdc_and_displacement_control_agree():
-    from snapmorph.units import UnitGeometry, simulate_unit
-
-    for h in (0.015, 0.02, 0.025):
-        g = UnitGeometry(L=0.1, h=h, t=0.5e-3, w=5e-3, b=5e-3)
-        a = simulate_unit(g, method="mgdc")
-        b = simulate_unit(g, method="displacement")
-        assert a.status == "ok" and b.status == "ok", (h, a.status, b.status)
-        assert abs(a.F_cr / b.F_cr - 1) < 0.01
-        assert abs(a.S / b.S - 1) < 0.01
-
-
 # ---------------------------------------------------------------------- cantilever, clamp API
 def cantilever(n_nodes, method="mgdc"):
-    from tests.solver.test_elastica import EI, L, T as TC, W as WC, E as EC
+    from validation.cantilever import EI, L, T as TC, W as WC, E as EC
 
     s = np.linspace(0.0, L, n_nodes)
     st = Structure()
@@ -336,7 +303,7 @@ def cantilever(n_nodes, method="mgdc"):
 
 
 def test_cantilever_with_clamp_is_within_0_2_percent_at_101_nodes():
-    from tests.solver.test_elastica import max_relative_errors
+    from validation.cantilever import max_relative_errors
 
     for method in ("mgdc", "displacement"):
         path = cantilever(101, method)
@@ -347,7 +314,7 @@ def test_cantilever_with_clamp_is_within_0_2_percent_at_101_nodes():
 
 @pytest.mark.slow
 def test_cantilever_with_clamp_converges_as_n_to_the_minus_two():
-    from tests.solver.test_elastica import max_relative_errors
+    from validation.cantilever import max_relative_errors
 
     ns = np.array([26, 51, 101, 201])
     errors = np.array([max_relative_errors(cantilever(n))[0] for n in ns])
@@ -502,7 +469,7 @@ def test_path_repr_is_short():
 
 def _work_gaps(path, structure):
     """Energy balance of each step of a displacement-controlled path (see
-    `solver.continuation._work_mismatch`): |dE - 0.5 (F_k + F_k+1) dd| / (|dE| + fscale dd)."""
+    `solver.displacement._work_mismatch`): |dE - 0.5 (F_k + F_k+1) dd| / (|dE| + fscale dd)."""
     fscale = structure.scales()[1]
     dd, dE = np.diff(path.displacement), np.diff(path.energy)
     work = 0.5 * (path.force[1:] + path.force[:-1]) * dd
@@ -510,7 +477,7 @@ def _work_gaps(path, structure):
 
 
 def test_work_mismatch_is_zero_on_a_quadratic_energy_and_flags_a_jump():
-    from snapmorph.solver.continuation import _work_mismatch
+    from snapmorph.solver.displacement import _work_mismatch
 
     # E = k d^2 / 2, F = k d: the trapezoid is exact
     k, d0, d1 = 3.0e3, 1e-3, 1.5e-3
@@ -526,7 +493,7 @@ def test_work_mismatch_is_zero_on_a_quadratic_energy_and_flags_a_jump():
 def test_a_step_that_gains_energy_however_small_ends_with_a_status_that_says_so(monkeypatch):
     # Were every step to gain energy beyond the work of the push (as the jump to a far
     # equilibrium did on the 401-node arch), the path must stop with a status saying so.
-    import snapmorph.solver.continuation as cont
+    import snapmorph.solver.displacement as cont
 
     monkeypatch.setattr(cont, "_work_mismatch", lambda *a: (1.0, False))
     st, mid, h, EI = arch(10, 101, "fix", centre=False)
@@ -546,10 +513,7 @@ def test_displacement_control_keeps_no_step_that_breaks_the_energy_balance(h_ove
     # and the lowest force is where the rig leaves the stable branch: the fold in d that
     # MGDC passes before it runs back (unstable with d held, which no rig can hold) to the
     # rejoining point, MGDC's own F_min.
-    st, mid, h, EI = arch(h_over_t, 401, "fix", centre=False)
-    dc = st.push(mid, (0.0, -1.0), 2.2 * h, method="displacement")
-    st, mid, h, EI = arch(h_over_t, 401, "fix", centre=False)
-    mg = st.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
+    mg, dc, st, h, EI = mgdc_and_rig(h_over_t, 401, "fix")
     assert dc.status == "ok" and mg.status == "ok", (dc.status, mg.status)
     assert dc.displacement[-1] >= 2.2 * h * (1 - 1e-9)
     newton = dc.iterations[1:] > 0  # not a rig move (iterations 0)

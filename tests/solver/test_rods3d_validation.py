@@ -13,9 +13,11 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-from snapmorph.solver import Structure, Structure3D, reference_models
+from snapmorph.solver import Structure, Structure3D
 from snapmorph.solver.states import DisplacementProbe
-from tests.solver.models import clamped_rod_nodes
+from validation.arch import clamped_arch
+from validation.cantilever import clamped_rod_nodes
+from validation.strip3d import ltb_cantilever
 
 E, NU = 2.2e9, 0.38
 
@@ -98,9 +100,9 @@ def test_euler_column_parity():
 
 def test_centre_clamped_arch_parity():
     """The clamped–clamped cosine arch pushed at its midpoint through snap-through
-    (`solver.reference_models.clamped_arch`)."""
+    (`validation.arch.clamped_arch`)."""
     h, n = 0.01, 61
-    planar, mid, EI = reference_models.clamped_arch(h, n_nodes=n)
+    planar, mid, EI = clamped_arch(h, n_nodes=n)
     p2 = planar.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
     X = planar.reference_positions
     st = Structure3D()
@@ -144,16 +146,6 @@ def _extreme(probe, path, sign):
         lambda d: -sign * probe.solve(path.positions[i], d)[1], bounds=(a, b),
         method="bounded", options={"xatol": 1e-9 * path.displacement[-1]})
     return -sign * res.fun
-
-
-def ltb_cantilever(n, L=0.1, t=0.5e-3, w=10e-3):
-    x = np.linspace(0.0, L, n)
-    st = Structure3D()
-    rod = st.add_rod(np.stack([x, 0 * x, 0 * x], 1), width=w, thickness=t, E=E, nu=NU,
-                     normal=(0.0, 1.0, 0.0))  # thin along y: z is the stiff direction
-    st.clamp(rod.nodes[0], toward=rod.nodes[1])
-    r = st.rods[0]
-    return st, rod, float(r.EI1[0]), float(r.EI2[0]), float(r.GJ[0])
 
 
 def ltb_ratio(n):

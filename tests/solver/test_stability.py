@@ -15,7 +15,7 @@ Reference cases:
 import numpy as np
 import pytest
 
-from snapmorph.solver import Structure, reference_models
+from snapmorph.solver import Structure
 from snapmorph.solver.stability import (
     StateStability,
     eigenmodes,
@@ -23,19 +23,17 @@ from snapmorph.solver.stability import (
     seed_imperfection,
     state_stability,
 )
-from snapmorph.units import UnitGeometry, simulate_unit
-from tests.solver.models import clamped_arch, first_peak_index
-from tests.solver.test_column import P_CR, column
+from validation.arch import clamped_arch, first_peak_index
+from validation.column import P_CR, column
 
 L_SPAN, T, W, E = 0.1, 0.5e-3, 5e-3, 2.2e9
 EI = E * W * T**3 / 12
-MM = 1e-3
 
 
 def free_centre_arch(h_over_t, n_nodes=101):
     """The clamped cosine arch with only the midpoint's x held (its rotation free)."""
     h = h_over_t * T
-    st, mid, _ = reference_models.clamped_arch(h, n_nodes=n_nodes, t=T, l=L_SPAN, w=W, E=E,
+    st, mid, _ = clamped_arch(h, n_nodes=n_nodes, t=T, l=L_SPAN, w=W, E=E,
                                                centre_clamped=False)
     return st, mid, h
 
@@ -234,33 +232,6 @@ def test_seeded_imperfection_is_stress_free_and_keeps_the_constraints():
         seed_imperfection(st, modes[0][:-1], amplitude=1e-6)
 
 
-# ---------------------------------------------------------------------- the unit
-TABLE1 = [(9.11, 99.2, 0.50), (9.10, 99.0, 0.75), (19.24, 99.5, 0.50), (19.96, 99.7, 0.75),
-          (40.68, 99.4, 0.50), (39.85, 99.5, 0.75)]
-
-
-@pytest.mark.parametrize("h,L,t", TABLE1)
-def test_table1_units_meet_no_bifurcation_and_state_iii_is_stable(h, L, t):
-    g = UnitGeometry(L=L * MM, h=h * MM, t=t * MM, w=5 * MM, b=5 * MM)
-    r = simulate_unit(g, check_self_standing=False)
-    assert r.status == "ok" and r.bifurcation is False
-    states = r.stability["states"]
-    assert states["iii"].stable_displacement and states["iii"].stable_force
-    assert states["ii"].stable_displacement and not states["ii"].stable_force
-    assert states["i"].stable_displacement
-    kinds = [(c.kind, c.control) for c in r.stability["critical_points"]]
-    assert kinds[:2] == [("limit", "force"), ("limit", "force")]
-
-
-def test_unit_primary_and_bare_paths_agree_with_the_followed_one():
-    g = UnitGeometry(L=99.5 * MM, h=19.24 * MM, t=0.5 * MM, w=5 * MM, b=5 * MM)
-    follow = simulate_unit(g, check_self_standing=False)
-    primary = simulate_unit(g, check_self_standing=False, branch="primary")
-    bare = simulate_unit(g, check_self_standing=False, critical=False)
-    assert primary.F_cr == follow.F_cr == bare.F_cr
-    assert bare.bifurcation is None and "states" not in bare.stability
-
-
 class _ParabolaProbe:
     """A stand-in for `DisplacementProbe`: F(d) = 1 - (d - 0.3)^2, except that solves in
     ``jump`` land on another equilibrium with 50 % more force."""
@@ -280,7 +251,7 @@ def test_refine_maximum_finds_the_vertex_and_refuses_a_branch_jump():
     solve of the search had converged on another equilibrium and its force was taken as
     the maximum. A solve far off the samples' line now abandons the search (the callers fall
     back to the samples' parabola)."""
-    from snapmorph.solver.continuation import ConvergenceError
+    from snapmorph.solver.problem import ConvergenceError
     from snapmorph.solver.states import refine_maximum
 
     d = np.array([0.0, 0.2, 0.4, 0.6])

@@ -9,7 +9,8 @@ import pytest
 
 from snapmorph.solver import Structure3D
 from snapmorph.solver.banded import band_to_dense
-from snapmorph.solver.continuation import equilibrium
+from snapmorph.solver.equilibrium import equilibrium
+from validation.strip3d import cantilever
 
 E, NU, W, T = 2.2e9, 0.38, 5e-3, 0.5e-3
 
@@ -118,15 +119,6 @@ def test_problem_interface_members():
     assert sysm.n == 3 * (n - 2) - 3 + (n - 1)  # node 0 and the last node held, 4-5 merged
     assert sysm.bandwidth <= 13  # positions and twists interleaved along the rod
     assert np.all(sysm.dof_map[st.node_dofs(5)] == sysm.dof_map[st.node_dofs(4)])
-
-
-def cantilever(n, L=0.1, w=W, t=T):
-    x = np.linspace(0.0, L, n)
-    st = Structure3D()
-    rod = st.add_rod(np.stack([x, 0 * x, 0 * x], 1), width=w, thickness=t, E=E, nu=NU,
-                     normal=(0.0, 0.0, 1.0))
-    st.clamp(rod.nodes[0], toward=rod.nodes[1])
-    return st, rod
 
 
 @pytest.mark.parametrize("direction,EI_name", [((0.0, 0.0, -1.0), "EI1"), ((0.0, 1.0, 0.0), "EI2")])

@@ -1,0 +1,356 @@
+"""MGDC load control: the modified generalised displacement control method (Yang & Shieh
+1990; modified by Liu & Paulino 2017, the paper's choice).
+
+Each step starts from the tangent ``u_P = K^-1 P`` with a load increment
+``dlam = ± s / |u_P|`` — a fixed displacement norm ``s`` per step, which is what GDC's
+stiffness parameter achieves. GDC flips the sign when consecutive tangents point apart; here
+the predictor is oriented along the previous converged step instead (``sign(u_P . du_prev)``),
+which turns at limit points the same way but is not fooled when the tangent rotates fast in
+a very compliant structure. Corrector iterations keep the increment orthogonal to the step's
+first tangent: ``dlam_j = -(u_P1 . u_R^j) / (u_P1 . u_P^j)``. The step size adapts to the
+number of iterations, as in Liu & Paulino's modification.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from snapmorph.solver.branching import BranchMonitor, PathState
+from snapmorph.solver.newton import TOL_DISP, counted, settled
+from snapmorph.solver.path import Recorder
+from snapmorph.solver.problem import check_options, driver_system, load_unit, load_vector
+from snapmorph.solver.stability import held_count
+from snapmorph.solver.steps import CROSSING_REFINE, driver_options, path_info, rig_rescue, timed_out
+
+# A path on which the pushed node travels (sum of |dd|) more than this times the push
+# distance goes back and forth between branches instead of on to the target: it is stopped
+# with a "stopped: the path wanders" status (a snap-back adds its own return only).
+WANDER = 6.0
+
+
+def follow_mgdc(
+    structure,
+    control,
+    steps=100,
+    max_step=None,
+    tol=1e-9,
+    max_iter=12,
+    max_accept_iter=8,
+    target_iterations=4,
+    max_steps=20000,
+    stop=None,
+    min_step_ratio=1e-7,
+    branch="follow",
+    critical=True,
+    switch_size=0.5,
+    max_switches=8,
+    time_limit=None,
+):
+    """Load-controlled path with MGDC until the node's displacement reaches
+    ``control.distance``.
+
+    ``steps``: the first step moves the node by about distance / (4 steps); later steps
+    adapt to the iteration count, with a displacement norm per step up to ``max_step`` (m,
+    default 8 x the first's); a step that needs more than ``max_accept_iter`` iterations
+    is retried at half the size.
+    ``stop(path_arrays)`` may end the path early.
+    ``critical``, ``branch``, ``switch_size``, ``max_switches``, ``time_limit``,
+    ``max_steps``: as for `follow_displacement` (critical points and branch switching).
+    """
+    t0 = time.perf_counter()
+    o = driver_options(steps, tol, max_iter, max_steps, min_step_ratio, max_step,
+                       switch_size, max_switches, time_limit, branch)
+    o.update(check_options(max_accept_iter=(max_accept_iter, "int", 1, 10**4, ""),
+                           target_iterations=(target_iterations, "int", 1, 10**4, "")))
+    return _Mgdc(structure, control, o, stop, branch, critical, t0).run()
+
+
+class _Mgdc:
+    """One MGDC push (`follow_mgdc`): its state between steps."""
+
+    def __init__(self, structure, control, o, stop, branch, critical, t0):
+        self.t0, self.o, self.stop, self.control = t0, o, stop, control
+        self.tol, self.max_iter = o["tol"], o["max_iter"]
+        system, fu = driver_system(structure)
+        self.system, self.fu = system, fu
+        length, fscale = structure.scales()
+        self.fscale = fscale = fscale / fu  # forces below are in the system's units (N / fu)
+        self.tol_disp = TOL_DISP * length
+        # the load factor lam is the force in units of `unit` N (see `load_unit`)
+        self.unit = load_unit(fscale)
+        self.P = load_vector(system, control) * self.unit
+        r_node = np.array([system.dof_map[dof] for dof in control.dofs])
+        self._n_free = np.where(r_node >= 0, control.direction, 0.0)
+        self._r_idx = np.where(r_node >= 0, r_node, 0)
+        self.q = structure.initial_state()
+        self.lam = 0.0
+        self.rec = Recorder(structure, fu, system)
+        system.evaluate(self.q)
+        if not system.factor():
+            raise ValueError(
+                "the structure is not held against rigid-body motion under load control "
+                "(singular stiffness); add supports"
+            )
+        self.uP = system.solve(self.P)
+        neg0 = system.negative_eigenvalues
+        self.rec.add(0.0, 0.0, self.q, system.energy, 0, neg0, neg0)
+        dd0 = control.distance / o["steps"]
+        flex = self.node_component(self.uP)
+        if not flex > 0:
+            raise ValueError("the pushed node does not move along the direction under load")
+        # the first step moves the node by a quarter of distance / steps (the path may bend
+        # sharply at once); steps then grow up to four times that, i.e. about distance / steps
+        self.s0 = s0 = 0.25 * dd0 * np.linalg.norm(self.uP) / flex
+        self.monitor = None
+        if critical:
+            self.monitor = BranchMonitor(structure, control, branch, self.tol, fscale, length,
+                                         s0, system=system, switch_size=o["switch_size"],
+                                         max_switches=o["max_switches"], load_unit=self.unit,
+                                         rig_step=o["switch_size"] * 0.25 * dd0,
+                                         driver_max_iter=self.max_iter, force_unit=fu)
+            self.monitor.start(PathState(self.q.copy(), 0.0, 0.0, neg0, neg0, 1.0, 1.0,
+                                         system.energy))
+        self.s = s0
+        self.s_max = 8.0 * s0 if o["max_step"] is None else o["max_step"]
+        self.sign = 1.0
+        self.step_prev = None
+        self.status = "ok"
+        self.d = 0.0
+        self.rejected = 0
+        self.total_iterations = 0
+        self.travelled = 0.0  # sum of |dd| along the path, m (wandering guard)
+
+    def node_component(self, u):
+        """The pushed node's component along the direction of a reduced vector ``u``."""
+        return float(self._n_free @ u[self._r_idx])
+
+    def run(self):
+        """Step until the target displacement (or a stop); returns the `Path`."""
+        while self.d < self.control.distance:
+            if len(self.rec.rows["d"]) > self.o["max_steps"]:
+                self.status = f"stopped: more than {self.o['max_steps']} steps"
+                break
+            if self.step_prev is not None:
+                # orient the predictor along the previous step (passes limit points, where the
+                # tangent K^-1 P reverses, without being fooled by fast-rotating tangents)
+                self.sign = 1.0 if float(self.uP @ self.step_prev) >= 0.0 else -1.0
+            trial = self._step()
+            if trial == "rescued":
+                continue
+            if trial is None or not self._accept(*trial):
+                break
+        s = self.system
+        info = {
+            "wall_time": time.perf_counter() - self.t0,
+            "bandwidth": s.bandwidth,
+            "n_dofs": s.n,
+            "final_step_norm": self.s,
+            "rejected_steps": self.rejected,
+            "total_iterations": self.total_iterations,
+        }
+        monitor = self.monitor
+        return self.rec.path(self.status, "mgdc", path_info(info, monitor),
+                             monitor.points if monitor is not None else ())
+
+    def _step(self):
+        """Predictor and corrector, halving the step until one is accepted. Returns (q_try,
+        lam_try, iterations, u_P at q_try or None), "rescued" (the rig moved the push on)
+        or None (the path ends; the status says why)."""
+        system, o = self.system, self.o
+        uP1 = self.uP
+        while True:
+            if timed_out(self.t0, o["time_limit"]):
+                self.status = (f"timeout: time_limit {o['time_limit']:g} s reached at "
+                               f"d = {self.d:.6g} m, F = {self.lam * self.unit * self.fu:.6g} N")
+                return None
+            q_try, lam_try, it, converged = self._correct(uP1)
+            # A corrector that wandered far from its predictor may have jumped to another
+            # branch: reject the step and retry with half the size.
+            # Too many iterations also means the predictor overshot a strongly curved path.
+            if converged and (system.step_norm(q_try, self.q) > 4.0 * self.s
+                              or it > o["max_accept_iter"]):
+                converged = False
+            uP_try = None
+            if converged and self.monitor is not None and self.s > CROSSING_REFINE * self.s0:
+                uP_try = system.solve(self.P)
+                converged = not self._crosses(uP_try, q_try)
+            if converged:
+                return q_try, lam_try, it, uP_try
+            self.rejected += 1
+            self.s *= 0.5
+            if self.s < o["min_step_ratio"] * self.s0:
+                self.status = (
+                    f"not converged: MGDC step size underflow near d = {self.d:.6g} m, "
+                    f"F = {self.lam * self.unit * self.fu:.6g} N"
+                )
+                return "rescued" if self._rescue() else None
+            # restore the factorisation at the last converged state for the next try
+            system.evaluate(self.q)
+            system.factor()
+
+    def _correct(self, uP1):
+        """One predictor along ``uP1`` and the MGDC corrector iterations from it. Returns
+        (q_try, lam_try, iterations as step control counts them, converged)."""
+        system, P, tol_disp = self.system, self.P, self.tol_disp
+        q_try = self.q.copy()
+        dlam = self.sign * self.s / np.linalg.norm(uP1)
+        lam_try = self.lam + dlam
+        system.increment(q_try, uP1, dlam)
+        tol_force = self.tol * max(self.fscale, abs(lam_try) * self.unit)
+        du_max = du_prev = np.inf
+        for it in range(1, self.max_iter + 1):
+            done = settled(du_max, du_prev, tol_disp)
+            fstat, r_max, du_step, dl = system.fused_mgdc(
+                q_try, lam_try, P, uP1, np.inf if done else tol_force)
+            if fstat == 0:
+                return q_try, lam_try, counted(it, done, du_max, tol_disp, r_max,
+                                               tol_force), True
+            if fstat == 2:
+                du_max, du_prev = du_step, du_max
+                lam_try += dl
+                self.total_iterations += 1
+                continue
+            # LDL^T without pivoting failed: the general path with the dense fallback
+            system.evaluate(q_try)
+            R = system.grad - lam_try * P
+            if not np.all(np.isfinite(R)) or not system.factor():
+                break
+            r_max = float(np.max(np.abs(R)))
+            if r_max <= tol_force or done:
+                return q_try, lam_try, counted(it, done, du_max, tol_disp, r_max,
+                                               tol_force), True
+            both = system.solve(np.stack([P, -R], axis=1))
+            uPj, uRj = both[:, 0], both[:, 1]
+            denom = float(uP1 @ uPj)
+            if denom == 0.0 or not np.isfinite(denom):
+                break
+            dl = -float(uP1 @ uRj) / denom
+            du = dl * uPj + uRj
+            if not np.all(np.isfinite(du)):
+                break
+            du_max, du_prev = float(np.max(np.abs(du))), du_max
+            system.increment(q_try, du)
+            lam_try += dl
+            self.total_iterations += 1
+        return q_try, lam_try, it, False
+
+    def _crosses(self, uP, q_try):
+        """Would the converged trial state q_try (tangent ``uP = K^-1 P`` there) put a
+        bifurcation or a jumped fold between itself and q (see CROSSING_REFINE)?"""
+        system = self.system
+        flex = self.node_component(uP)
+        step = system.reduced(q_try) - system.reduced(self.q)
+        orient = 1.0 if float(uP @ step) >= 0.0 else -1.0
+        return self.monitor.suspicious(held_count(system.negative_eigenvalues, flex),
+                                       orient * (1.0 if flex >= 0.0 else -1.0))
+
+    def _rescue(self):
+        """The steps underflowed: the rig moves the push on (`steps.rig_rescue`), if it may.
+        True when it did (the path goes on from its new state)."""
+        reroute = rig_rescue(self.monitor, self.rec, self.unit)
+        if reroute is None:
+            return False
+        self._go_on_from(reroute)
+        self.rec.add(self.d, self.lam * self.unit, self.q, reroute.state.energy, 0,
+                     reroute.state.neg_force, reroute.state.neg_disp)
+        self.s, self.status = self.s0, "ok"
+        return True
+
+    def _go_on_from(self, reroute):
+        """Continue from the first state of the branch a `Reroute` leads onto (the monitor
+        left the system factorised there)."""
+        s_new = reroute.state
+        self.q, self.lam, self.step_prev = s_new.q.copy(), s_new.lam, reroute.step
+        self.system.accept(self.q)
+        self.uP = self.system.solve(self.P)
+        self.d = s_new.d
+
+    def _accept(self, q_try, lam_try, it, uP_try):
+        """Take the converged trial state; record it (or the monitor's reroute) and adapt
+        the step. False when the path ends here (the status says why, or ``stop``)."""
+        system, rec, monitor, unit = self.system, self.rec, self.monitor, self.unit
+        # accepted: the system holds K at q_try
+        self.step_prev = system.reduced(q_try) - system.reduced(self.q)
+        self.q, self.lam = q_try, lam_try
+        system.accept(self.q)
+        self.uP = system.solve(self.P) if uP_try is None else uP_try
+        self.d = self.control.displacement(self.q)
+        neg = system.negative_eigenvalues
+        # Schur complement: dF/dd of the pushed node is 1 / (n . u_P); a negative one
+        # accounts for one negative eigenvalue that holding the displacement removes.
+        flex = self.node_component(self.uP)
+        negd = held_count(neg, flex)
+        energy, iterations = system.energy, it
+        if monitor is not None:
+            # direction of travel at the new state: along +-u_P, oriented like the last step
+            orient = 1.0 if float(self.uP @ self.step_prev) >= 0.0 else -1.0
+            new = PathState(self.q.copy(), self.lam, self.d, neg, negd, orient,
+                            orient * (1.0 if flex >= 0.0 else -1.0), energy)
+            reroute = self._observe(new)
+            if reroute is False:
+                return False
+            if reroute is not None:
+                self._go_on_from(reroute)
+                # Restart at a step half the distance from the point: near a bifurcation
+                # the other branches are that close, and a longer step could land on one
+                # of them (a wrong reversal); steps then grow by 1.5 per step.
+                self.s = min(max(self.s, 0.5 * reroute.distance), self.s_max)
+                s_new = reroute.state
+                neg, negd = s_new.neg_force, s_new.neg_disp
+                energy, iterations = s_new.energy, 0
+        rec.add(self.d, self.lam * unit, self.q, energy, iterations, neg, negd)
+        self.travelled += abs(self.d - rec.rows["d"][-2])
+        distance = self.control.distance
+        if self.travelled > WANDER * distance:
+            self.status = _wandering(rec, self.travelled, distance)
+            return False
+        target = self.o["target_iterations"]
+        if it <= target - 1:
+            self.s = min(1.5 * self.s, self.s_max)
+        elif it >= target + 3:
+            self.s *= 0.6
+        if self.stop is not None and self.stop(rec.rows):
+            return False
+        if abs(self.d) > 10 * distance:
+            self.status = "stopped: the pushed node moved away from the target distance"
+            return False
+        return True
+
+    def _observe(self, new):
+        """Show the new state to the monitor. Returns its `Reroute`, None (go on), or False
+        (the path ends: a backward branch that does not restabilise, and nothing ahead)."""
+        monitor, rec = self.monitor, self.rec
+        if monitor.excursion_verdict(new) == "abandon":
+            # the backward branch taken at a bifurcation climbs to ever less stable
+            # branches instead of restabilising: back to the point, the rig jumps on
+            row = monitor.excursion["row"]
+            reroute = monitor.abandon_excursion()
+            if reroute is None:
+                self.status = (f"stopped: the branch left at the bifurcation at d = "
+                               f"{rec.rows['d'][row]:.6g} m turns back and does not "
+                               f"restabilise, and no stable state lies ahead of the point")
+                return False
+            rec.rewind(row + 1)
+            self.travelled = float(np.sum(np.abs(np.diff(rec.rows["d"]))))
+            return reroute
+        reroute = monitor.observe(new, len(rec.rows["d"]) - 1)
+        if reroute is not None:
+            if monitor.excursion is not None and "row" not in monitor.excursion:
+                monitor.excursion["row"] = len(rec.rows["d"])
+            c = reroute.critical
+            rec.add(c.d, c.lam * self.unit, c.q, c.energy, 0, c.neg_force, c.neg_disp)
+        return reroute
+
+
+def _wandering(rec, travelled, distance):
+    """The status of a path stopped because d went back and forth (see WANDER)."""
+    d = np.asarray(rec.rows["d"])
+    dd = np.diff(d)
+    dd = dd[dd != 0.0]
+    turns = int(np.sum(dd[1:] * dd[:-1] < 0.0))
+    return (f"stopped: the path wanders: the pushed node travelled {travelled / distance:.3g} "
+            f"x the distance, turning back {turns} times between d = {d.min():.6g} and "
+            f"{d.max():.6g} m (branches switched to do not lead to the target); "
+            f"try method='displacement'")
