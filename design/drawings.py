@@ -27,11 +27,11 @@ size (`nesting`), with `kerf_mm` the cuts are offset by half the kerf (`kerf`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from snapmorph.design.sheets import Entity, Sheet
 from snapmorph.design.units import Unit
 
 LAYERS = ("CUT", "ENGRAVE", "MARKS")
@@ -39,40 +39,6 @@ DEFAULT_COLOURS = {"CUT": 1, "ENGRAVE": 5, "MARKS": 3}  # red, blue, green (ACI)
 GAP = 10.0  # mm between parts on a sheet
 SIDE_NOTE = ("unit n+: arch on the engraved face of the base, n-: on the other face; "
              "J<k>: glue joint k")
-
-
-@dataclass
-class Entity:
-    """A polyline (points (k, 2) mm, closed or open) or a text (at points[0], height mm,
-    turned `angle` degrees counter-clockwise)."""
-
-    layer: str
-    points: np.ndarray
-    closed: bool = False
-    text: str = ""
-    height: float = 0.0
-    angle: float = 0.0
-
-    @property
-    def left_aligned(self) -> bool:
-        """Notes (MARKS) start at their point; engraved labels are centred on it."""
-        return self.layer == "MARKS"
-
-
-@dataclass
-class Sheet:
-    """The drawing of one sheet; `parts` maps a part name to the indices of its entities."""
-
-    name: str
-    entities: list = field(default_factory=list)
-    parts: dict = field(default_factory=dict)
-
-    def add(self, part: str, entity: Entity) -> None:
-        self.parts.setdefault(part, []).append(len(self.entities))
-        self.entities.append(entity)
-
-    def outlines(self, layer: str = "CUT") -> list:
-        return [e for e in self.entities if e.layer == layer and not e.text and e.closed]
 
 
 # --- geometry of one unit (mm) ---------------------------------------------------------------

@@ -56,7 +56,7 @@ def compensate(sheet, kerf_mm: float):
     part's outlines, inward for holes (CUT outlines inside another one of the same part)."""
     from dataclasses import replace
 
-    from snapmorph.design.drawings import Sheet
+    from snapmorph.design.sheets import Sheet
 
     if not kerf_mm:
         return sheet

@@ -68,7 +68,7 @@ def nest_parts(parts, bed=COMMON_BED, gap: float = GAP_MM, margin: float = MARGI
     """Sheets ("sheet-1", ...; drawings.Sheet, origin at the sheet's lower left corner, mm)
     holding every part of `parts` ([(name, [Entity])]) inside bed = (width, height) mm, no two
     parts' boxes closer than gap. Raises ValueError naming a part that fits in no orientation."""
-    from snapmorph.design.drawings import Sheet
+    from snapmorph.design.sheets import Sheet
 
     W, H = (float(v) for v in bed)
     room = (W - 2 * margin, H - 2 * margin)

@@ -25,6 +25,20 @@ import numpy as np
 OVERLAY_COLOURS = {"target": 7, "predicted": 5, "simulated": 1}
 
 
+def mm_per_px() -> float:
+    """mm per SVG px: svgelements' own px per mm (96 px per inch), so that the user units of a
+    mm document convert back exactly as svgelements converted them."""
+    global _MM_PER_PX
+    if _MM_PER_PX is None:
+        from svgelements import Length
+
+        _MM_PER_PX = 1.0 / float(Length("1mm").value(ppi=96))
+    return _MM_PER_PX
+
+
+_MM_PER_PX = None  # svgelements is imported on first use only
+
+
 @dataclass
 class DrawingFrame:
     """Where the target's frame sits in its source file.
@@ -49,9 +63,7 @@ class DrawingFrame:
         mm = np.asarray(xy_m, dtype=float) * 1e3
         if self.kind != "svg":
             return mm / self.mm_per_unit
-        from snapmorph.design.targets_svg import MM_PER_PX
-
-        px = np.stack([mm[:, 0], -mm[:, 1]], axis=-1) / MM_PER_PX
+        px = np.stack([mm[:, 0], -mm[:, 1]], axis=-1) / mm_per_px()
         a, b, c, d, e, f = self.svg_matrix
         inv = np.linalg.inv(np.array([[a, c], [b, d]]))
         return (px - [e, f]) @ inv.T

@@ -16,24 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
-from snapmorph.design.targets_frame import DrawingFrame
+from snapmorph.design.targets_frame import DrawingFrame, mm_per_px
 from snapmorph.design.targets_pieces import Piece, TargetError
 
-#: mm per px: svgelements' own px per mm (96 px per inch), so that mm documents read exactly
-MM_PER_PX = None  # set on first use by _mm_per_px()
 #: sampling of curved segments: one point per this many mm of curve, 16 to 4000 per segment
 SAMPLE_MM = 0.25
 
 _CLOSED_SHAPES = ("Rect", "Circle", "Ellipse", "Polygon")
-
-
-def _mm_per_px() -> float:
-    global MM_PER_PX
-    if MM_PER_PX is None:
-        from svgelements import Length
-
-        MM_PER_PX = 1.0 / float(Length("1mm").value(ppi=96))
-    return MM_PER_PX
 
 
 def read_svg(path, where: str | None = None):
@@ -51,7 +40,7 @@ def read_svg(path, where: str | None = None):
         svg = se.SVG.parse(io.BytesIO(ET.tostring(root)), ppi=96)
     except (ET.ParseError, ValueError, TypeError, AttributeError, IndexError) as exc:
         raise TargetError(f"{where}: not a readable SVG file ({exc})", "unreadable") from None
-    mmpx = _mm_per_px()
+    mmpx = mm_per_px()
     frame = _frame(svg, where)
     pieces, notes, last_use = [], [], None
     for el in svg.elements():
@@ -147,7 +136,7 @@ def _frame(svg, where) -> DrawingFrame:
         mm = se.Matrix(m)
         matrix = (mm.a, mm.b, mm.c, mm.d, mm.e, mm.f)
     attrs = {k: svg.values.get(k) for k in ("width", "height", "viewBox")}
-    page = (float(svg.width) * _mm_per_px(), float(svg.height) * _mm_per_px()) \
+    page = (float(svg.width) * mm_per_px(), float(svg.height) * mm_per_px()) \
         if (attrs["width"] and attrs["height"]) or attrs["viewBox"] else None
     return DrawingFrame("svg", svg=attrs, svg_matrix=matrix, page_mm=page, source=where)
 
@@ -157,7 +146,7 @@ def sample_subpath(sub):
     ends, curves every SAMPLE_MM (an even count of intervals, so a Bézier's midpoint is kept)."""
     import svgelements as se
 
-    px_step = SAMPLE_MM / _mm_per_px()
+    px_step = SAMPLE_MM / mm_per_px()
     pts, closed, start = [], False, None
     for seg in sub:
         if isinstance(seg, se.Move):

@@ -12,10 +12,6 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-import pytest
-
-# Until the redesign of issue 21 has removed them (strict: the marks must go then).
-KNOWN_BEFORE_THE_REDESIGN = pytest.mark.xfail(strict=True, reason="issue 21")
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -105,7 +101,6 @@ def test_every_import_follows_the_flow():
     assert not wrong, "imports against the flow:\n" + "\n".join(sorted(wrong))
 
 
-@KNOWN_BEFORE_THE_REDESIGN
 def test_no_files_import_each_other():
     mods, graph = import_graph()
     edges = {m: sorted({t for _, t in e if t != m}) for m, e in graph.items()}
