@@ -30,9 +30,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from snapmorph.design.arrays import (PETG_E, ArrayResult, _turn_deg, build_array, rigid_residual,
-                           simulate_array)
+from snapmorph.design.arrays import PETG_E, ArrayResult, build_array, rigid_residual, simulate_array
 from snapmorph.design.units import Unit
+from snapmorph.units.shapes import end_tangent_angle
 
 __all__ = ["ArrayStudy", "all_array_states", "curve_deviation", "fk_released",
            "paper_three_units", "released_shapes", "run_study", "shape_change", "table3_M_units"]
@@ -308,7 +308,7 @@ def run_study(units, name: str = "array", nodes=None, E: float = PETG_E, orders=
         table.append(dict(unit=i + 1, L=u.L, h=u.h, b=u.b, side=u.side,
                           theta_simulate=thetas.get(i, float("nan")),
                           # a one-unit array numbers its base nodes first
-                          theta_held=abs(_turn_deg(rec.held[:len(shape.xy)])),
+                          theta_held=abs(end_tangent_angle(rec.held[:len(shape.xy)])),
                           theta_released=abs(rec.turn_deg), F_cr=rec.F_cr))
     times = {"states": t_states, "single units": t_single, "forward kinematics": t_fk,
              "orders": t_orders, "total": time.perf_counter() - t_all}

@@ -10,8 +10,8 @@ The model
 ---------
 One base rod runs through every unit (solid 4w over each unit's end regions and over spacers,
 hollow 2w between); each arched unit adds its arch rod on its side, bonded to the base exactly as
-in the single unit: each unit is meshed by `solver.unit_model.build_unit` (same nodes, sections,
-ties, joint and support nodes as `solver.unit.simulate_unit`) and the meshes are joined end to
+in the single unit: each unit is meshed by `units.geometry.build_unit` (same nodes, sections,
+ties, joint and support nodes as `units.planar.simulate_unit`) and the meshes are joined end to
 end, sharing the base node at each junction. One change: every bond joins coincident nodes
 (see `build_array`, ``coincident_ties``), so that no bond depends on a unit's orientation. The
 first base edge is clamped; nothing else is held and there is no gravity.
@@ -28,11 +28,12 @@ the structure's `reduced_system`, from the current deformed state). The clamp is
 push: the two rollers and the apex are then a statically determinate support of the whole array,
 the actuator's force is carried by unit i's two rollers only, and the rest of the array, loaded
 by nothing, follows as a rigid body. The actuator is self-equilibrated: the reactions are
-internal to unit i. After the force has crossed zero twice, state (iii) with the actuator still
-on is solved at zero force (as `simulate_unit` does); then the array is moved rigidly back so the
+internal to unit i. The push is the push-through experiment of every unit (`units.push_through`,
+the one `simulate_unit` goes through): after the force has crossed zero twice, state (iii) with
+the actuator still on is solved at zero force; then the array is moved rigidly back so the
 clamped edge is where it was, the actuator and rollers are removed and the free equilibrium with
 the clamp only is solved. Its stability (no negative eigenvalue) and that the unit stayed snapped
-are checked.
+are checked (else status "second state unstable: unit i: ...").
 
 Why the conjecture holds here: in a released state no external load acts (the clamp carries
 nothing), so a cut through the base between two units transmits no force and no moment; each unit
@@ -52,11 +53,14 @@ import numpy as np
 
 from snapmorph.design.kinematics import parse_snapped as parse_state
 from snapmorph.design.units import Unit
+from snapmorph.units import status as statuses
+from snapmorph.units.push_through import Rules, largest_force, push_through
+from snapmorph.units.shapes import end_tangent_angle
 
 __all__ = ["ArrayModel", "ArrayResult", "SnapRecord", "build_array", "simulate_array",
            "snap_unit", "release", "rigid_residual"]
 
-PETG_E = 2.2e9  # Pa (solver.unit_model.PETG_E; repeated so that importing this module is light)
+PETG_E = 2.2e9  # Pa (units.geometry.PETG_E; repeated so that importing this module is light)
 #: a unit counts as snapped when its base turns by more than this towards its arch (deg); an
 #: unsnapped unit of a released array is exactly straight (stress free)
 SNAPPED_TURN_DEG = 0.1
@@ -145,7 +149,8 @@ def build_array(units, nodes: int | None = None, E: float = PETG_E,
     """Mesh ``units`` (list of `design.Unit`) as one array, unit 1 starting at x = 0.
 
     ``nodes``: resolution per unit, about the number of base nodes of each unit (default: the
-    single unit's converged default, 161); ``E``: Young's modulus (Pa).
+    single unit's converged default, `units.geometry.DEFAULT_NODES` = 101); ``E``: Young's
+    modulus (Pa).
 
     ``coincident_ties``: `build_unit` bonds the arch node half an edge past x0 = b + w to the
     base node below it although it sits on the sinusoid, z = h/2 (1 - cos(2 pi e/la)) above it
@@ -265,7 +270,7 @@ class SnapRecord:
     clamp frame; neighbour_change: (n_units,) largest change of each other unit's shape (base
     and arch nodes, after the best rigid fit) from before the snap to after the release (m;
     NaN for the snapped unit); turn_deg: the unit's base turning after the release; steps;
-    time (s); status."""
+    time (s); status: "ok" or "<status name>: unit i: why" (`units.status`)."""
 
     unit: int
     d: np.ndarray
@@ -281,6 +286,11 @@ class SnapRecord:
     time: float = 0.0
     status: str = "ok"
 
+    @property
+    def status_code(self) -> int:
+        """The map code of ``status`` (`units.status.status_code`)."""
+        return statuses.status_code(self.status)
+
     def __repr__(self):
         return (f"SnapRecord(unit {self.unit}, {self.status!r}, F_cr={self.F_cr:.4g} N, "
                 f"turn {self.turn_deg:.3f} deg, {self.steps} steps, {self.time:.2f} s)")
@@ -291,7 +301,7 @@ class ArrayResult:
     """A simulated array state.
 
     base: (K, 2) base polyline (m), from (0, 0) with its first edge along +x (the clamp);
-    status: "ok" or why not; state: '0'/'1' string; order: the units snapped, in order
+    status: "ok" or why not (the failed snap's, `SnapRecord`; ``status_code`` its code); state: '0'/'1' string; order: the units snapped, in order
     (0-based); positions: (n_nodes, 2) every node (m); snaps: [SnapRecord]; unit_bases: [(k_i, 2)]
     each unit's base (sharing the junction points); joints: (n+1, 2) unit end points; angles:
     (n+1,) base direction at each joint (rad, from the edges next to it); model: the mesh;
@@ -314,6 +324,12 @@ class ArrayResult:
         return (f"ArrayResult({n} units, state {self.state!r}, status {self.status!r}, "
                 f"base {len(self.base)} points over {length * 1e3:.1f} mm, "
                 f"{len(self.snaps)} snaps, {self.time:.2f} s)")
+
+    @property
+    def status_code(self) -> int:
+        """The map code of ``status`` (`units.status.status_code`): 0 ok, 1 a unit is
+        monostable, 5 a unit does not stay snapped released, 2 a computation failed."""
+        return statuses.status_code(self.status)
 
     @property
     def unit_bases(self) -> list:
@@ -340,7 +356,7 @@ class ArrayResult:
 
     def turns_deg(self) -> np.ndarray:
         """(n,) each unit's base turning, last edge from first edge (deg; > 0 left)."""
-        return np.array([_turn_deg(self.positions[m.base]) for m in self.model.meshes])
+        return np.array([end_tangent_angle(self.positions[m.base]) for m in self.model.meshes])
 
 
 # ---------------------------------------------------------------------------------- helpers
@@ -358,12 +374,6 @@ def _to_clamp_frame(model: ArrayModel, P):
     return _frame(P, P[a].copy(), P[b] - P[a])
 
 
-def _turn_deg(xy) -> float:
-    e0, e1 = xy[1] - xy[0], xy[-1] - xy[-2]
-    a = math.atan2(e1[1], e1[0]) - math.atan2(e0[1], e0[0])
-    return math.degrees((a + math.pi) % (2 * math.pi) - math.pi)
-
-
 def rigid_residual(A, B) -> float:
     """Largest distance (m) between point sets A and B (k, 2) after the best rigid motion of B
     onto A (least squares, no reflection): the change of shape, free of rigid motion."""
@@ -377,16 +387,6 @@ def rigid_residual(A, B) -> float:
     c, s = math.cos(ang), math.sin(ang)
     fit = b @ np.array([[c, s], [-s, c]])
     return float(np.max(np.hypot(*(fit - a).T)))
-
-
-def _peak(d, F, k):
-    """(F, d) at the vertex of the parabola through the samples around the largest force."""
-    if 0 < k < len(F) - 1:
-        x, y = d[k - 1: k + 2] - d[k], F[k - 1: k + 2]
-        a, b, c = np.polyfit(x, y, 2)
-        if a < 0 and x[0] <= -b / (2 * a) <= x[2]:
-            return float(c - b * b / (4 * a)), float(d[k] - b / (2 * a))
-    return float(F[k]), float(d[k])
 
 
 def _unit_points(model: ArrayModel, P, i):
@@ -409,6 +409,7 @@ class _Newton:
     EI/l^2 (l the model's size) or a last correction below 1e-11 l."""
 
     def __init__(self, st, tol=1e-9, max_iter=30):
+        self.structure = st
         X = st.reference_positions
         self.length = float(max(np.ptp(X[:, 0]), np.ptp(X[:, 1])))
         EI = max(float(np.max(r.EI)) for r in st.rods)
@@ -438,13 +439,134 @@ class _Newton:
 
 
 # ---------------------------------------------------------------------------------- one snap
+#: the push-through of a unit of an array (`units.push_through`): F_cr is the parabola's
+#: vertex at the largest force sampled; state (iii) with the actuator on is the answer (no
+#: state (ii), no stability check: the released array's stability is checked instead)
+ARRAY_RULES = Rules(peak=largest_force, refine_peak=False, unstable_state=False, exact=("iii",),
+                    stability=False)
+
+
+@dataclass
+class _ArrayPath:
+    """The samples of a unit's push in an array: apex displacement (m), force (N), states
+    (K, n_nodes, 2) in the unit's frame, and "ok" or why the push ended early."""
+
+    displacement: np.ndarray
+    force: np.ndarray
+    positions: np.ndarray
+    status: str
+
+
+class _UnitInArray:
+    """Unit ``i`` of the array at positions ``P`` (in the unit's frame) as the model of
+    `units.push_through`: its apex pushed towards the base by displacement control from the
+    current deformed state (the `solver.Structure` drivers start from the stress-free one),
+    the actuator's force summed over the joint; states are node positions (n, 2)."""
+
+    def __init__(self, model: ArrayModel, i, P, steps, max_distance, min_step):
+        from snapmorph.solver import ConvergenceError
+
+        self.failures = (ConvergenceError,)
+        u, m = model.units[i], model.meshes[i]
+        self.model, self.i, self.P, self.apex = model, i, P, m.apex
+        self.h, self.steps, self.max_distance, self.min_step = u.h, steps, max_distance, min_step
+        self.push_dir = np.array([0.0, -float(u.side)])  # towards the base
+        self.joint = np.array(m.joint)
+        self.newton = _Newton(model.structure(clamp=False, actuator=i, apex_z=True))
+        self.z0 = P[self.joint, 1].copy()
+        self.probe = _ArrayProbe(self)
+        self.hold = None
+
+    def push(self, stop):
+        """First step h/steps, halved when Newton fails (down to ``min_step`` h), grown by 1.5
+        after an easy step (up to 4 h/steps), until ``stop`` or the apex moved
+        ``max_distance`` h."""
+        from snapmorph.solver import ConvergenceError
+
+        h, newton, joint = self.h, self.newton, self.joint
+        d, F, states = [0.0], [0.0], [self.P.copy()]
+        dd = h / self.steps
+        dd_max, dd_min = 4.0 * h / self.steps, self.min_step * h
+        prev = None
+        status = "ok"
+        while d[-1] < self.max_distance * h:
+            step = dd
+            guess = states[-1].copy()
+            if prev is not None:  # secant predictor
+                guess += (states[-1] - prev[1]) * (step / (d[-1] - prev[0]))
+            guess[joint, 1] = self.z0 + self.push_dir[1] * (d[-1] + step)
+            try:
+                P_new, iterations, _ = newton.solve(guess, max_move=0.25 * h)
+            except ConvergenceError:
+                dd = 0.5 * dd
+                if dd < dd_min:
+                    status = (f"not converged: displacement control failed at "
+                              f"d = {d[-1] * 1e3:.4g} mm (step size underflow)")
+                    break
+                continue
+            prev = (d[-1], states[-1])
+            d.append(d[-1] + step)
+            F.append(newton.force(joint, self.push_dir))
+            states.append(P_new)
+            if iterations <= 5:
+                dd = min(1.5 * dd, dd_max)
+            if stop({"d": d, "F": F}):
+                break
+        return _ArrayPath(np.array(d), np.array(F), np.array(states), status)
+
+    def states(self, path):
+        return path.positions
+
+    def positions(self, state):
+        return np.asarray(state).reshape(-1, 2)
+
+    def displacement(self, positions) -> float:
+        return float(self.push_dir @ (positions[self.apex] - self.P[self.apex]))
+
+    def solve_unloaded(self, guess):
+        """State (iii) with the actuator on at zero force: the apex free in z."""
+        if self.hold is None:
+            self.hold = self.model.structure(clamp=False, actuator=self.i, apex_z=False)
+        held, _ = self.hold.solve_equilibrium(guess, node=None)
+        return held, held
+
+    def checkpoint(self, stage):
+        pass
+
+
+class _ArrayProbe:
+    """Displacement-controlled solves of a unit in an array (its apex's displacement d
+    prescribed), as `solver.states.zero_force_displacement` asks for them."""
+
+    def __init__(self, unit: _UnitInArray):
+        self.unit = unit
+        self.structure = unit.newton.structure
+        self.last_state = None
+
+    def solve(self, guess, d):
+        u = self.unit
+        P = np.array(guess, dtype=float).reshape(-1, 2)
+        P[u.joint, 1] = u.z0 + u.push_dir[1] * d
+        P, _, neg = u.newton.solve(P, max_move=0.25 * u.h)
+        self.last_state = P.reshape(-1).copy()
+        return P, u.newton.force(u.joint, u.push_dir), neg
+
+
+def _unit_status(out, i) -> str:
+    """The push-through outcome's status for unit ``i`` (0-based) of an array:
+    "<status name>: unit i + 1: <why>"."""
+    name, _, why = out.status.partition(": ")
+    return f"{name}: unit {i + 1}: {why or out.reason}"
+
+
 def snap_unit(model: ArrayModel, positions, i: int, steps: int = 20,
               max_distance: float = 3.0, min_step: float = 1e-4):
     """Snap unit ``i`` (0-based) of the released array at ``positions`` (clamp frame, m).
 
-    Displacement control of the apex towards the base in unit i's frame: first step h/steps,
-    halved when Newton fails (down to ``min_step`` h), grown by 1.5 after an easy step (up to
-    4 h/steps), until the actuator force has crossed zero twice or the apex moved
+    Displacement control of the apex towards the base in unit i's frame (`_UnitInArray`:
+    first step h/steps, halved when Newton fails down to ``min_step`` h, grown up to
+    4 h/steps), the push-through experiment of every unit (`units.push_through`, rules
+    `ARRAY_RULES`) until the actuator force has crossed zero twice or the apex moved
     ``max_distance`` h. Returns (positions after the release, clamp frame; SnapRecord)."""
     from snapmorph.solver import ConvergenceError
 
@@ -456,75 +578,15 @@ def snap_unit(model: ArrayModel, positions, i: int, steps: int = 20,
     s0, s1 = m.supports
     # unit i's frame: origin at its left support, x along its supports, arch on side * z
     P = _frame(Q, Q[s0].copy(), Q[s1] - Q[s0])
-    push_dir = np.array([0.0, -float(u.side)])  # towards the base
-    joint = np.array(m.joint)
-    newton = _Newton(model.structure(clamp=False, actuator=i, apex_z=True))
-    z0 = P[joint, 1].copy()
-    h = u.h
-    d, F, states = [0.0], [0.0], [P.copy()]
-    dd = h / steps
-    dd_max, dd_min = 4.0 * h / steps, min_step * h
-    prev = None
-    status = "ok"
-    seen_negative = False
-    crossed = None
-    while d[-1] < max_distance * h:
-        step = dd
-        guess = states[-1].copy()
-        if prev is not None:  # secant predictor
-            guess += (states[-1] - prev[1]) * (step / (d[-1] - prev[0]))
-        guess[joint, 1] = z0 + push_dir[1] * (d[-1] + step)
-        try:
-            P_new, iterations, _ = newton.solve(guess, max_move=0.25 * h)
-        except ConvergenceError:
-            dd = 0.5 * dd
-            if dd < dd_min:
-                status = (f"not converged: unit {i + 1}: displacement control failed at "
-                          f"d = {d[-1] * 1e3:.4g} mm (step size underflow)")
-                break
-            continue
-        prev = (d[-1], states[-1])
-        d.append(d[-1] + step)
-        F.append(newton.force(joint, push_dir))
-        states.append(P_new)
-        if iterations <= 5:
-            dd = min(1.5 * dd, dd_max)
-        if F[-1] < 0.0:
-            seen_negative = True
-        elif seen_negative:
-            crossed = len(F) - 1
-            break
-    d, F = np.array(d), np.array(F)
+    out = push_through(_UnitInArray(model, i, P, steps, max_distance, min_step), ARRAY_RULES)
+    d, F = out.curve
     rec = SnapRecord(i, d, F, steps=len(d) - 1)
-    k = int(np.argmax(F))
-    rec.F_cr, rec.d_cr = _peak(d, F, k)
-    peak = states[k]
-    if status == "ok" and crossed is None:
-        status = (f"monostable: unit {i + 1}: the actuator force did not cross zero twice up to "
-                  f"d = {d[-1] * 1e3:.4g} mm")
-    if status != "ok":
-        rec.status, rec.time = status, time.perf_counter() - t0
+    rec.F_cr, rec.d_cr = out.F_cr, out.d_cr
+    if not out.bistable:  # monostable, the push failed, or state (iii) was not found
+        rec.status, rec.time = _unit_status(out, i), time.perf_counter() - t0
         return Q, rec
-
-    # state (iii) with the actuator on, at zero force: the apex free in z, Newton from the
-    # states bracketing the crossing (as solver.unit does)
-    F0, F1 = F[crossed - 1], F[crossed]
-    s = F0 / (F0 - F1)
-    guess = (1 - s) * states[crossed - 1] + s * states[crossed]
-    hold = model.structure(clamp=False, actuator=i, apex_z=False)
-    try:
-        held, _ = hold.solve_equilibrium(guess, node=None)
-    except ConvergenceError:
-        # Newton from the interpolated state can miss (the bracket spans a curved stretch of
-        # the path): locate F = 0 by regula falsi on displacement-controlled solves first
-        try:
-            near = _zero_force_state(newton, states, d, F, crossed, joint, z0, push_dir, h)
-            held, _ = hold.solve_equilibrium(near, node=None)
-        except ConvergenceError as exc:
-            rec.status = f"not converged: unit {i + 1}: zero-force state (iii) ({exc})"
-            rec.time = time.perf_counter() - t0
-            return Q, rec
-    rec.d_zero = float(push_dir @ (held[m.apex] - P[m.apex]))
+    held = out.states["iii"]
+    rec.d_zero = out.d_second
     rec.held = _to_clamp_frame(model, held)
     # release: actuator and rollers off, the clamp back on the first base edge
     try:
@@ -533,54 +595,17 @@ def snap_unit(model: ArrayModel, positions, i: int, steps: int = 20,
         rec.status = f"not converged: unit {i + 1}: free equilibrium after release ({exc})"
         rec.time = time.perf_counter() - t0
         return Q, rec
-    rec.turn_deg = _turn_deg(Q_new[m.base])
+    rec.turn_deg = end_tangent_angle(Q_new[m.base])
     if info["negative_eigenvalues"] > 0:
-        rec.status = (f"unstable: unit {i + 1}: the released state has "
+        rec.status = (f"second state unstable: unit {i + 1}: the released state has "
                       f"{info['negative_eigenvalues']} negative eigenvalue(s)")
     elif u.side * rec.turn_deg <= SNAPPED_TURN_DEG:
-        rec.status = f"snapped back: unit {i + 1} did not stay snapped when released"
+        rec.status = (f"second state unstable: unit {i + 1} did not stay snapped when "
+                      "released")
     rec.neighbour_change = _shape_changes(model, Q, Q_new, i)
-    rec.neighbour_change_peak = _shape_changes(model, P, peak, i)
+    rec.neighbour_change_peak = _shape_changes(model, P, out.states["i"], i)
     rec.time = time.perf_counter() - t0
     return Q_new, rec
-
-
-def _zero_force_state(newton, states, d, F, k, joint, z0, push_dir, h, max_steps=40):
-    """A state near F = 0 between path samples k-1 and k (F changes sign there): regula falsi
-    (Illinois) on the apex displacement, each trial a displacement-controlled solve."""
-    from snapmorph.solver import ConvergenceError
-
-    a, b = float(d[k - 1]), float(d[k])
-    Fa, Fb = float(F[k - 1]), float(F[k])
-    Pa, Pb = states[k - 1], states[k]
-    tol = 1e-9 * max(abs(Fa), abs(Fb))
-    best, best_F = (Pa, Fa) if abs(Fa) < abs(Fb) else (Pb, Fb)
-    side = 0
-    for _ in range(max_steps):
-        x = b - Fb * (b - a) / (Fb - Fa)
-        s = (x - a) / (b - a)
-        guess = (1 - s) * Pa + s * Pb
-        guess[joint, 1] = z0 + push_dir[1] * x
-        P, _, _ = newton.solve(guess, max_move=0.25 * h)
-        f = newton.force(joint, push_dir)
-        if abs(f) < abs(best_F):
-            best, best_F = P, f
-        if abs(f) <= tol:
-            break
-        if (f > 0) == (Fb > 0):
-            b, Fb, Pb = x, f, P
-            if side == -1:
-                Fa *= 0.5
-            side = -1
-        else:
-            a, Fa, Pa = x, f, P
-            if side == 1:
-                Fb *= 0.5
-            side = 1
-    else:
-        if abs(best_F) > 1e3 * tol:
-            raise ConvergenceError("the zero-force state was not located")
-    return best
 
 
 def release(model: ArrayModel, positions):
@@ -625,7 +650,7 @@ def simulate_array(units, snapped=None, order=None, nodes: int | None = None,
     ``units``: list of `design.Unit` (SI; may be None with ``model``); ``snapped``: one
     boolean per unit or a '0'/'1' string (None: every arched unit); ``order``: 0-based indices
     of the units in the order they are snapped, a sequence or "2,0" (default ascending; units
-    listed but not snapped are skipped); ``nodes``: resolution per unit (default 161, as
+    listed but not snapped are skipped); ``nodes``: resolution per unit (default 101, as
     `simulate_unit`); ``E`` (Pa); ``model``: a mesh from `build_array` to reuse;
     ``start``: an `ArrayResult` of the same units to continue from (its snapped units stay
     snapped; ``snapped`` must include them and ``order`` lists only the new ones); ``steps``:
@@ -673,7 +698,7 @@ def simulate_array(units, snapped=None, order=None, nodes: int | None = None,
             snaps.append(rec)
             if rec.status != "ok":
                 status = rec.status
-                if rec.status.startswith(("unstable", "snapped back")):
+                if rec.status.startswith("second state unstable"):  # released, not held
                     Q = Q_new
                 break
             Q = Q_new

@@ -33,6 +33,7 @@ import numpy as np
 
 from snapmorph.design.sheets import Entity, Sheet
 from snapmorph.design.units import Unit
+from snapmorph.units.shapes import sinusoid_length
 
 LAYERS = ("CUT", "ENGRAVE", "MARKS")
 DEFAULT_COLOURS = {"CUT": 1, "ENGRAVE": 5, "MARKS": 3}  # red, blue, green (ACI)
@@ -42,13 +43,6 @@ SIDE_NOTE = ("unit n+: arch on the engraved face of the base, n-: on the other f
 
 
 # --- geometry of one unit (mm) ---------------------------------------------------------------
-def sinusoid_length(h: float, la: float, n: int = 4001) -> float:
-    """Arc length of z = (h/2)(1 - cos(2π x / la)) over 0 <= x <= la (any length unit)."""
-    x = np.linspace(0.0, la, n)
-    f = np.sqrt(1.0 + (math.pi * h / la * np.sin(2 * math.pi * x / la)) ** 2)
-    return float((la / (n - 1)) / 3.0 * (f[0] + f[-1] + 4 * f[1:-1:2].sum() + 2 * f[2:-1:2].sum()))
-
-
 def developed_length(u: Unit) -> float:
     """Flat blank length of the arch strip (m): flat ends plus the sinusoid's arc length."""
     return 2.0 * (u.b + u.w) + sinusoid_length(u.h, u.arch_length)

@@ -31,7 +31,8 @@ import time
 
 import numpy as np
 
-from snapmorph.units.frame3d import Mesh3D, end_tangent_angle
+from snapmorph.units.frame3d import Mesh3D
+from snapmorph.units.shapes import end_tangent_angle
 
 __all__ = ["run_variant", "joint_kind", "VARIANTS", "DECISIVE"]
 

@@ -5,21 +5,18 @@ and rigid groups with global node indices, numbered as `solver.Structure3D` numb
 (rod after rod, in the order added). Meshes can be checked (topology, widths, bonds,
 supports) without solving; `Mesh3D.to_structure()` builds the `Structure3D`. SI units.
 
-Also the helpers every 3-D unit shares: the arc-length mesh of an arch with a rigid actuator
-joint, and the signed angle between the end tangents of a polyline in a vertical plane.
+Also the arc-length mesh of an arch with a rigid actuator joint that the 3-D unit uses (the
+shared geometry helpers, sinusoid, arc length and end angles, are `units.shapes`).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-try:  # the unit engineer moves UnitGeometry to units/; keep working before and after
-    from snapmorph.units.geometry import UnitGeometry  # noqa: F401 - re-exported
-except ImportError:  # pragma: no cover - older tree
-    from snapmorph.units.geometry import UnitGeometry
+from snapmorph.units.geometry import UnitGeometry  # noqa: F401 - re-exported
+from snapmorph.units.shapes import arch_height, cumulative_length, segment_points
 
 PETG_NU = 0.38  # Poisson's ratio of PETG (unit-model.md)
 JOINT_LENGTH_DEFAULT = 0.003175  # m, 1/8 in acrylic stem (unit-model.md)
@@ -143,23 +140,6 @@ class Mesh3D:
         return st
 
 
-def segment_points(breaks, spacing):
-    """Points along sorted ``breaks``, every interval split into equal parts no longer than
-    ``spacing`` (every break point kept exactly)."""
-    pts = [float(breaks[0])]
-    for a, b in zip(breaks[:-1], breaks[1:]):
-        n = max(1, int(math.ceil((b - a) / spacing - 1e-9)))
-        pts.extend(a + (b - a) * np.arange(1, n + 1) / n)
-    return np.array(pts)
-
-
-def arch_profile(x, x0, span, h):
-    """Sinusoidal arch height (m) at x: flat outside [x0, x0 + span], apex h at mid-span."""
-    x = np.asarray(x, dtype=float)
-    inside = (x > x0) & (x < x0 + span)
-    return np.where(inside, 0.5 * h * (1.0 - np.cos(2 * np.pi * (x - x0) / span)), 0.0)
-
-
 def arch_nodes_x(x_start, x_end, x0, span, h, spacing, x_act, joint_length):
     """Abscissae of the arch nodes on its raised part, from ``x_start`` to ``x_end`` (both
     kept), near-uniform in arc length, with the actuator joint centred on ``x_act``.
@@ -172,8 +152,7 @@ def arch_nodes_x(x_start, x_end, x0, span, h, spacing, x_act, joint_length):
     Returns (x, node index of the actuator point or of the clamped edge's first node, the
     (start, stop) slice of the nodes that move rigidly with it)."""
     xs = np.linspace(x_start, x_end, 8001)
-    z = arch_profile(xs, x0, span, h)
-    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(xs), np.diff(z)))])
+    s = cumulative_length(xs, arch_height(xs, x0, span, h))
     total = s[-1]
     s_act = float(np.interp(x_act, xs, s))
     half = 0.5 * joint_length
@@ -204,20 +183,13 @@ def arch_nodes_x(x_start, x_end, x0, span, h, spacing, x_act, joint_length):
     return x, act, (lo, hi + 1)
 
 
-def end_tangent_angle(points, up=(0.0, 0.0, 1.0)):
-    """Signed angle (degrees) from the first to the last edge of a polyline (n, 3) measured
-    in the vertical plane through its chord: > 0 when the ends rise (the line curls toward
-    ``up``, the side the arch started on), as `solver.unit`'s theta for a planar base."""
-    p = np.asarray(points, dtype=float)
-    chord = p[-1] - p[0]
-    up = np.asarray(up, dtype=float)
-    along = chord - (chord @ up) * up
-    n = np.linalg.norm(along)
-    along = along / n if n > 0 else np.array([1.0, 0.0, 0.0])
+def __getattr__(name):
+    if name == "end_tangent_angle":  # moved to units.shapes (0.2); the old name warns
+        import warnings
 
-    def angle(e):
-        return math.atan2(e @ up, e @ along)
+        from snapmorph.units import shapes
 
-    a = angle(p[-1] - p[-2]) - angle(p[1] - p[0])
-    a = (a + math.pi) % (2 * math.pi) - math.pi
-    return math.degrees(a)
+        warnings.warn("snapmorph.units.frame3d.end_tangent_angle is deprecated: use "
+                      "snapmorph.units.shapes.end_tangent_angle", DeprecationWarning, stacklevel=2)
+        return shapes.end_tangent_angle
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

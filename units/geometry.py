@@ -13,6 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from snapmorph.solver.structure import Structure
+from snapmorph.units.shapes import (arch_height, cumulative_length, polyline_length, segment_points,
+                                    sinusoid)
 
 PETG_E = 2.2e9  # Pa
 SUPPORT_OFFSET = 0.03  # rollers at 0.03 L from each end
@@ -116,8 +118,7 @@ def geometry_problem(L, h, t, w, b, E, joint_length=JOINT_LENGTH_DEFAULT, bond_l
                 f"{q(b + w)} (default: the whole flat part); got {q(bond_length)}")
     if h > 0:
         xs = np.linspace(b + w, L - b - w, 4001)
-        zs = 0.5 * h * (1.0 - np.cos(2 * np.pi * (xs - xs[0]) / span))
-        arch = float(np.sum(np.hypot(np.diff(xs), np.diff(zs))))
+        arch = polyline_length(xs, sinusoid(xs, xs[0], span, h))
         rod = arch + 2.0 * (b + w)  # the arch rod, flat ends included
         if t < rod / MAX_SLENDERNESS * edge:
             return (f"t (sheet thickness, {unit}) must be >= the arch rod's length / "
@@ -170,7 +171,7 @@ class UnitGeometry:
     def arch_length(self) -> float:
         """Arc length of the sinusoidal part of the arch (m)."""
         xs = np.linspace(self.flat_length, self.L - self.flat_length, 4001)
-        return float(np.sum(np.hypot(np.diff(xs), np.diff(self.arch_z(xs)))))
+        return polyline_length(xs, self.arch_z(xs))
 
     @property
     def flat_length(self) -> float:
@@ -189,10 +190,8 @@ class UnitGeometry:
 
     def arch_z(self, x):
         """Arch centreline height z(x) (m): flat ends, sinusoid in between."""
-        x = np.asarray(x, dtype=float)
-        x0, la = self.flat_length, self.arch_span
-        inside = (x > x0) & (x < self.L - x0)
-        return np.where(inside, 0.5 * self.h * (1.0 - np.cos(2 * np.pi * (x - x0) / la)), 0.0)
+        x0 = self.flat_length
+        return arch_height(x, x0, self.arch_span, self.h, end=self.L - x0)
 
     def scaled(self, factor: float) -> "UnitGeometry":
         """The same unit with every length (joint and bond included) multiplied by ``factor``."""
@@ -224,16 +223,6 @@ class UnitModel:
     base_mid: int
 
 
-def _segment_points(breaks, spacing):
-    """Points along sorted ``breaks`` with every interval split into equal parts no longer
-    than ``spacing`` (keeps every break point exactly)."""
-    pts = [breaks[0]]
-    for a, b in zip(breaks[:-1], breaks[1:]):
-        n = max(1, int(math.ceil((b - a) / spacing - 1e-9)))
-        pts.extend(a + (b - a) * np.arange(1, n + 1) / n)
-    return np.array(pts)
-
-
 def _half_sinusoid_x(g: UnitGeometry, spacing, start_x, joint_half):
     """x of the arch nodes from ``start_x`` (just past the flat region) towards the apex at
     L/2, near-uniform in arc length, with one edge centred on the end of the joint (arc length
@@ -246,17 +235,17 @@ def _half_sinusoid_x(g: UnitGeometry, spacing, start_x, joint_half):
     nodes belong to the rigid joint."""
     x0, xm = g.flat_length, 0.5 * g.L
     xs = np.linspace(x0, xm, 4001)
-    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(xs), np.diff(g.arch_z(xs))))])
+    s = cumulative_length(xs, g.arch_z(xs))
     total = s[-1]
     s_start = float(np.interp(start_x, xs, s))
     if joint_half <= 0.0:
         centre = min(spacing, 0.5 * (total - s_start))  # the clamped edge across the apex
-        targets = _segment_points(np.array([s_start, total - 0.5 * centre]), spacing)
+        targets = segment_points(np.array([s_start, total - 0.5 * centre]), spacing)
         return np.interp(targets, s, xs), 0.5 * centre
     straddle = min(spacing, joint_half, 0.5 * (total - joint_half - s_start))
     outer = total - joint_half - 0.5 * straddle  # free side of the straddling edge
     inner = total - joint_half + 0.5 * straddle
-    targets = _segment_points(np.array([s_start, outer, inner, total]), spacing)
+    targets = segment_points(np.array([s_start, outer, inner, total]), spacing)
     return np.interp(targets, s, xs), joint_half + 0.5 * straddle
 
 
@@ -310,7 +299,7 @@ def build_unit(
         breaks += [min(glued, bond_end), L - min(glued, bond_end)]
     breaks = np.sort(np.array(breaks))
     breaks = np.unique(np.round(breaks / L, 14)) * L
-    base_x = _segment_points(breaks, spacing)
+    base_x = segment_points(breaks, spacing)
 
     flat_left = base_x[base_x <= bond_end + 1e-12 * L]
     half, s_rigid = _half_sinusoid_x(g, spacing, x0 + half_edge, 0.5 * g.joint_length)
@@ -352,7 +341,7 @@ def build_unit(
     # the joint: arch nodes up to the far end of the edges straddling its ends (and at
     # least the apex's two neighbours)
     xs = np.linspace(g.flat_length, 0.5 * L, 4001)
-    s_half = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(xs), np.diff(g.arch_z(xs))))])
+    s_half = cumulative_length(xs, g.arch_z(xs))
     arc_from_apex = s_half[-1] - np.interp(np.minimum(arch_x, L - arch_x), xs, s_half)
     in_joint = (arch_x > g.flat_length) & (arc_from_apex <= s_rigid * (1 + 1e-9) + 1e-15)
     if g.joint_length > 0:

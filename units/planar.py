@@ -13,11 +13,13 @@ equilibrium branch crosses it (a bifurcation), the push leaves along the critica
 Energies are the elastic energies of the exact states, which equal the work of F along the
 path (the supports do no work), i.e. the integrals of F dd. SI units throughout.
 
-Zero crossings of F(d) are classified by the sign of the slope dF/dd between the path samples
-that bracket them, not by their order along d: (ii) is the first crossing after the force peak
-with dF/dd < 0, (iii) the next one with dF/dd > 0. The unit is bistable only when (iii) is
-stable with the actuator unloaded (no negative eigenvalue of the tangent stiffness); when it
-is not, ``status`` is "second state unstable: ..." and ``reason`` says why.
+The experiment is `units.push_through`, the one the 3-D and 2-D units and the units of a
+whole array go through: zero crossings of F(d) are classified by the sign of the slope dF/dd
+between the path samples that bracket them, not by their order along d: (ii) is the first
+crossing after the force peak with dF/dd < 0, (iii) the next one with dF/dd > 0. The unit is
+bistable only when (iii) is stable with the actuator unloaded (no negative eigenvalue of the
+tangent stiffness); when it is not, ``status`` is "second state unstable: ..." and ``reason``
+says why.
 
 Scale: the model is linear elastic, so its displacements do not depend on E and scale with
 the lengths, and its forces scale as E L^2. Every unit is therefore solved at the reference
@@ -27,20 +29,27 @@ take exactly the same steps as the reference.
 
 from __future__ import annotations
 
-import math
+import dataclasses
+import inspect
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-import dataclasses
-import inspect
-
 from snapmorph.solver.problem import ConvergenceError
 from snapmorph.solver.stability import state_stability
-from snapmorph.solver.states import DisplacementProbe, refine_maximum, zero_force_displacement
+from snapmorph.solver.states import DisplacementProbe
 from snapmorph.units import status as statuses
-from snapmorph.units.geometry import DEFAULT_NODES, PETG_E, UnitGeometry, build_unit, check_nodes, check_real
+from snapmorph.units.geometry import (DEFAULT_NODES, PETG_E, UnitGeometry, build_unit, check_nodes,
+                                      check_real)
+from snapmorph.units.push_through import Rules, push_through
+# the one crossing rule of every unit, under the names the tests check
+from snapmorph.units.push_through import (  # noqa: F401
+    first_peak as _first_peak,
+    zero_crossings as _zero_crossings,
+)
+from snapmorph.units.result import UnitResultBase
+from snapmorph.units.shapes import chord_angle, end_tangent_angle
 
 __all__ = ["UnitGeometry", "UnitResult", "simulate_unit", "STATUS_CODES", "DEFAULT_NODES"]
 
@@ -50,84 +59,37 @@ NAN = float("nan")
 #: the reference unit every simulation is solved at (results are scaled back)
 L_INTERNAL = 0.1  # m
 E_INTERNAL = PETG_E  # Pa
+DOWN = (0.0, -1.0)  # the apex is pushed towards the base
 METHODS = ("mgdc", "displacement")
 TIES = ("exact", "spring")
 BRANCHES = ("follow", "primary")
 
 
-class ReleasedMetrics:
-    """S and theta of the released state (iii) (actuator removed), read from a result's
-    ``released`` dict; shared by the planar, 3-D and 2-D units' results."""
+@dataclass(repr=False)
+class UnitResult(UnitResultBase):
+    """Metrics of one unit (SI: N, m, J, degrees for angles). NaN where a field does not exist.
 
-    @property
-    def S_released(self) -> float:
-        """Chord (m) of the released state (iii); NaN when the released unit is not stable."""
-        return float(self.released.get("S", NAN))
-
-    @property
-    def theta_released_deg(self) -> float:
-        """Turning (degrees) of the released state (iii); NaN when it is not stable."""
-        return float(self.released.get("theta_deg", NAN))
-
-
-@dataclass
-class UnitResult(ReleasedMetrics):
-    """Metrics of one unit (SI: N, m, J, degrees for angles). NaN where a field does not exist."""
+    The fields of `units.result.UnitResultBase` and: S, theta_deg (state (iii)'s chord and
+    turning); theta_end_deg; the energies; bifurcation; base_shape (state (iii)). released:
+    state (iii) with the actuator and rollers removed (what an array without actuators
+    holds): {"base_shape", "S" (chord, m), "theta_deg", "theta_end_deg", "arch"}; empty
+    when the released unit is not stable (then ``self_standing`` is False). reason: no
+    snap-through, no second crossing, state (iii) unstable (with its negative-eigenvalue
+    count), a failed or timed-out solve."""
 
     geometry: UnitGeometry
-    status: str
-    bistable: bool = False
-    F_cr: float = NAN
-    d_cr: float = NAN
-    d_unstable: float = NAN
-    d_second: float = NAN
     S: float = NAN
     theta_deg: float = NAN
+    base_shape: np.ndarray = field(default_factory=lambda: np.full((0, 2), np.nan))
     #: angle between the base's start tangent and its chord in state (iii), degrees, signed as
     #: theta (theta / 2 for a symmetric base; the convention the paper's maps most likely use)
     theta_end_deg: float = NAN
     energy_barrier: float = NAN
     energy_stored: float = NAN
-    self_standing: bool | None = None
-    #: state (iii) with the actuator and rollers removed (what an array without actuators
-    #: holds): {"base_shape", "S" (chord, m), "theta_deg", "theta_end_deg", "arch"}; empty
-    #: when the released unit is not stable (then ``self_standing`` is False)
-    released: dict = field(default_factory=dict)
-    #: why the unit is not bistable ("" when it is): no snap-through, no second crossing,
-    #: state (iii) unstable (with its negative-eigenvalue count), a failed or timed-out solve
-    reason: str = ""
     bifurcation: bool | None = None
-    curve: tuple = (np.zeros(0), np.zeros(0))
-    base_shape: np.ndarray = field(default_factory=lambda: np.full((0, 2), np.nan))
-    shapes: dict = field(default_factory=dict)
-    stability: dict = field(default_factory=dict)
-    solve_time: float = NAN
-    n_nodes: int = 0
 
-    @property
-    def status_code(self) -> int:
-        """The design-map code of ``status``: 0 ok, 1 monostable, 2 not converged,
-        3 invalid geometry, 4 timeout, 5 second state unstable."""
-        return statuses.status_code(self.status)
-
-    def summary(self) -> dict:
-        """The scalar metrics as a plain dict (SI)."""
-        keys = ("status", "bistable", "F_cr", "d_cr", "d_unstable", "d_second", "S",
-                "theta_deg", "theta_end_deg", "energy_barrier", "energy_stored",
-                "self_standing", "S_released", "theta_released_deg", "bifurcation", "reason",
-                "solve_time", "n_nodes")
-        return {k: getattr(self, k) for k in keys}
-
-    def __repr__(self) -> str:
-        g = self.geometry
-        head = (f"UnitResult({self.status.split(':')[0]!r}, L={g.L:.4g} m, h={g.h:.4g} m, "
-                f"t={g.t:.4g} m, w={g.w:.4g} m, b={g.b:.4g} m")
-        if self.bistable:
-            rel = self.theta_released_deg
-            return (f"{head}: bistable, F_cr={self.F_cr:.4g} N, S={self.S:.4g} m, "
-                    f"theta={self.theta_deg:.4g} deg, released theta={rel:.4g} deg, "
-                    f"{self.solve_time:.3g} s)")
-        return f"{head}: not bistable ({self.reason or self.status}), F_cr={self.F_cr:.4g} N)"
+    STATE_KEYS = ("theta_end_deg", "energy_barrier", "energy_stored")
+    MORE_KEYS = ("bifurcation",)
 
 
 def _check_choice(name, value, choices):
@@ -136,10 +98,22 @@ def _check_choice(name, value, choices):
     return value
 
 
-def _check_flag(name, value):
+def check_flag(name: str, value) -> bool:
+    """A simulation's flag (every unit's ``critical``, ``check_self_standing``): ``value`` as
+    a bool (True, False or a numpy bool), or ValueError naming ``name``."""
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be True or False; got {value!r}")
     return bool(value)
+
+
+def check_steps(steps):
+    """Every unit's ``steps`` (the push's first step is 3 h / steps) if an integer in
+    [1, 100000], or ValueError."""
+    if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) \
+            or not 1 <= steps <= 100000:
+        raise ValueError(f"steps (first step = 3 h / steps) must be an integer in [1, 100000]; "
+                         f"got {steps!r}")
+    return steps
 
 
 def simulate_unit(
@@ -181,12 +155,9 @@ def simulate_unit(
     _check_choice("method", method, METHODS)
     _check_choice("tie", tie, TIES)
     _check_choice("branch", branch, BRANCHES)
-    check_self_standing = _check_flag("check_self_standing", check_self_standing)
-    critical = _check_flag("critical", critical)
-    if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) \
-            or not 1 <= steps <= 100000:
-        raise ValueError(f"steps (first step = 3 h / steps) must be an integer in [1, 100000]; "
-                         f"got {steps!r}")
+    check_self_standing = check_flag("check_self_standing", check_self_standing)
+    critical = check_flag("critical", critical)
+    check_steps(steps)
     if tie_stiffness is not None:
         tie_stiffness = check_real("tie_stiffness", tie_stiffness, "N/m", "bond spring stiffness")
         if tie_stiffness <= 0:
@@ -301,96 +272,106 @@ def _check_deadline(deadline, stage):
         raise _Timeout(f"wall-time limit reached {stage}")
 
 
-def _stop_after_second_crossing(rows):
-    F = rows["F"]
-    if len(F) < 3 or F[-1] <= 0.0:
-        return False
-    return bool(np.any(np.asarray(F[:-1]) < 0.0))
+class _PlanarPush:
+    """The planar unit at the reference scale as the model of `units.push_through`: its apex
+    pushed down by a path follower (``push``: the drivers' options), displacement-controlled
+    probes that check the wall-time limit, states as node positions (n, 2)."""
+
+    failures = (ConvergenceError,)
+
+    def __init__(self, model, push, distance, deadline):
+        self.model, self.st = model, model.structure
+        self.options, self.distance, self.deadline = push, distance, deadline
+        self.X = self.st.reference_positions
+        self.probe = self.system = None
+
+    def push(self, stop):
+        st = self.st
+        options, late = _push_options(st, self.options, self.deadline)
+        if late is not None:
+            rule = stop
+
+            def stop(rows):  # the same test, and the deadline
+                return late() or rule(rows)
+        path = st.push(self.model.apex, DOWN, self.distance, stop=stop, **options)
+        if path.status.startswith("timeout") or (late is not None and late()):
+            raise _Timeout(f"while following the path ({len(path.force)} steps)")
+        self.system = st.reduced_system()  # force control: the actuator unloaded
+        self.probe = _DeadlineProbe(st, self.model.apex, DOWN, deadline=self.deadline)
+        return path
+
+    def states(self, path):
+        return path.positions
+
+    def positions(self, state):
+        return self.st.positions_of(state)
+
+    def displacement(self, positions) -> float:
+        apex = self.model.apex
+        return float(self.X[apex, 1] - positions[apex, 1])
+
+    def solve_unloaded(self, guess):
+        pos, _ = self.st.solve_equilibrium(guess, node=None)
+        return pos, pos
+
+    def stability(self, positions):
+        return _state_stability(self.st, self.model, positions, self.system)
+
+    def checkpoint(self, stage):
+        _check_deadline(self.deadline, stage)
 
 
 def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, deadline=None):
     st = model.structure
-    distance = 3.0 * g.h
-    push, late = _push_options(st, push, deadline)
-    stop = _stop_after_second_crossing
-    if late is not None:
-        def stop(rows):  # noqa: F811 - the same test, and the deadline
-            return late() or _stop_after_second_crossing(rows)
-    path = st.push(model.apex, (0.0, -1.0), distance, stop=stop, **push)
-    if path.status.startswith("timeout") or (late is not None and late()):
-        raise _Timeout(f"while following the path ({len(path.force)} steps)")
-    d, F = path.displacement, path.force
-    result = UnitResult(g, "ok", curve=(d.copy(), F.copy()))
+    critical = push["critical"]
+    out = push_through(_PlanarPush(model, push, 3.0 * g.h, deadline),
+                       Rules(peak_stability=critical))
+    if out.error is not None:  # a zero-force state not found: the simulation failed
+        raise out.error
+    path = out.path
+    result = UnitResult(g, "ok", curve=out.curve)
     result.stability = {
         "negative_eigenvalues": path.negative_eigenvalues.copy(),
         "negative_eigenvalues_displacement": path.negative_eigenvalues_displacement.copy(),
     }
-    critical = push["critical"]
     if critical:
         result.stability["critical_points"] = list(path.critical_points)
         result.stability["states"] = {}
-    force_system = st.reduced_system()
     arch, base = model.arch_nodes, model.base_nodes
 
     def shape(pos):
         return {"arch": pos[arch].copy(), "base": pos[base].copy()}
 
-    probe = _DeadlineProbe(st, model.apex, (0.0, -1.0), deadline=deadline)
-    i_pk = _first_peak(F)
+    i_pk = out.peak
     if i_pk is not None:
-        result.F_cr, result.d_cr = _refine_peak(d, F, i_pk, probe, path.positions)
+        result.F_cr, result.d_cr = out.F_cr, out.d_cr
         result.shapes["i"] = shape(path.positions[i_pk])
     if critical:
         d_snap = result.d_cr if i_pk is not None else np.inf
         result.bifurcation = any(c.d <= d_snap for c in path.bifurcations)
         if i_pk is not None:
-            result.stability["states"]["i"] = _state_stability(st, model, path.positions[i_pk],
-                                                               force_system)
-    _check_deadline(deadline, "after the path")
-    crossings = _zero_crossings(d, F, start=(i_pk or 0))
-    j = next((i for i, slope in crossings if slope < 0), None)
-    k = next((i for i, slope in crossings if slope > 0 and j is not None and i > j), None)
-    if k is None:
-        if path.status != "ok" and not path.status.startswith("stopped"):
-            result.status = path.status
-            result.reason = path.status
-        elif j is None or path.status == "ok":
-            result.status = "monostable"
-            result.reason = ("no snap-through: F does not fall below zero" if j is None else
-                             "F crosses zero downwards but does not rise through zero again "
-                             f"before d = {d[-1]:.4g} m")
-        else:
-            result.status = path.status
-            result.reason = path.status
+            result.stability["states"]["i"] = out.stability["i"]
+    if "iii" not in out.states:  # no second state: monostable, or the path failed
+        result.status, result.reason = out.status, out.reason
         return result
 
-    X = st.reference_positions
-    pos_ii = _solve_zero_force(st, path, j, probe)
-    pos_iii = _solve_zero_force(st, path, k, probe)
-    _check_deadline(deadline, "after the zero-force states")
-    result.d_unstable = float(X[model.apex, 1] - pos_ii[model.apex, 1])
-    result.d_second = float(X[model.apex, 1] - pos_iii[model.apex, 1])
+    pos_ii, pos_iii = out.states["ii"], out.states["iii"]
+    result.d_unstable, result.d_second = out.d_unstable, out.d_second
     result.energy_barrier = st.energy(pos_ii)
     result.shapes["ii"] = shape(pos_ii)
     result.shapes["iii"] = shape(pos_iii)
-    stab_ii = _state_stability(st, model, pos_ii, force_system)
-    stab_iii = _state_stability(st, model, pos_iii, force_system)
     if critical:
-        result.stability["states"]["ii"] = stab_ii
-        result.stability["states"]["iii"] = stab_iii
-    if stab_iii is None or not stab_iii.stable_force:
-        why = ("its tangent stiffness is singular (a critical state)" if stab_iii is None else
-               f"{stab_iii.negative_force} negative eigenvalue(s) of the tangent stiffness "
-               f"with the actuator unloaded")
-        result.status = f"second state unstable: state (iii) at d = {result.d_second:.4g} m has {why}"
-        result.reason = result.status
+        result.stability["states"]["ii"] = out.stability["ii"]
+        result.stability["states"]["iii"] = out.stability["iii"]
+    if not out.bistable:
+        result.status, result.reason = out.status, out.reason
         return result
     result.bistable = True
     base_pos = pos_iii[base]
     result.base_shape = base_pos.copy()
     result.S = float(base_pos[-1, 0] - base_pos[0, 0])
-    result.theta_deg = _end_tangent_angle(base_pos)
-    result.theta_end_deg = _chord_angle(base_pos)
+    result.theta_deg = end_tangent_angle(base_pos)
+    result.theta_end_deg = chord_angle(base_pos)
     result.energy_stored = st.energy(pos_iii)
     if check_self_standing:
         _check_deadline(deadline, "before the released state")
@@ -401,8 +382,8 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
             result.released = {
                 "base_shape": rb.copy(),
                 "S": float(np.hypot(*(rb[-1] - rb[0]))),
-                "theta_deg": _end_tangent_angle(rb),
-                "theta_end_deg": _chord_angle(rb),
+                "theta_deg": end_tangent_angle(rb),
+                "theta_end_deg": chord_angle(rb),
                 "arch": released[arch].copy(),
             }
     return result
@@ -412,105 +393,9 @@ def _state_stability(st, model, positions, system):
     """Negative-eigenvalue counts of a state with the apex loaded (force control) and held
     (displacement control); None when the state is exactly critical."""
     try:
-        return state_stability(st, positions, model.apex, (0.0, -1.0), system=system)
+        return state_stability(st, positions, model.apex, DOWN, system=system)
     except ValueError:
         return None
-
-
-def _first_peak(F):
-    for i in range(1, len(F) - 1):
-        if F[i] > 0 and F[i] >= F[i - 1] and F[i] > F[i + 1]:
-            return i
-    return None
-
-
-def _refine_peak(d, F, i, probe, positions):
-    """F_cr and d_cr: the maximum of F(d) located by displacement-controlled solves around
-    path sample ``i`` (a force maximum is a regular point under displacement control); the
-    vertex of the parabola through the three samples if the path is not monotone there."""
-    x, y = d[i - 1: i + 2], F[i - 1: i + 2]
-    if x[0] < x[1] < x[2]:
-        try:
-            F_max, d_max = refine_maximum(probe, d, F, positions, i, tol_d=2e-3 * (x[2] - x[0]))
-            if F_max >= F[i]:
-                return float(F_max), float(d_max)
-        except ConvergenceError:
-            pass
-        a, b, c = np.polyfit(x - x[1], y, 2)
-        xv = -b / (2 * a) if a < 0 else np.inf
-        if x[0] - x[1] <= xv <= x[2] - x[1]:
-            return float(c - b * b / (4 * a)), float(x[1] + xv)
-    return float(F[i]), float(d[i])
-
-
-def _zero_crossings(d, F, start=0):
-    """Zero crossings of F along the path after sample ``start``, in path order:
-    [(i, slope sign)] where samples i-1 and i bracket the zero and the sign is that of dF/dd
-    between them (-1: an unstable equilibrium under displacement control, such as (ii);
-    +1: a candidate stable state, such as (iii)). A path running backwards in d (snap-back)
-    flips the sign: it is the slope that classifies a crossing, not the direction of F."""
-    out = []
-    for i in range(max(start, 0) + 1, len(F)):
-        if i == 1 and F[0] == 0.0:
-            continue  # the unloaded start is not a crossing
-        if (F[i - 1] >= 0.0 > F[i]) or (F[i - 1] <= 0.0 < F[i]):
-            dF = F[i] - F[i - 1]
-            dd = d[i] - d[i - 1]
-            slope = np.sign(dF) * (np.sign(dd) if dd != 0 else 1.0)
-            out.append((i, int(slope)))
-    return out
-
-
-def _solve_zero_force(st, path, i, probe):
-    """Equilibrium at F = 0 between the path states i-1 and i (which bracket a zero of F).
-
-    Newton under load control from the interpolated state first; if it lands outside the
-    bracket (it can wander to another equilibrium), the zero is located by regula falsi on
-    displacement-controlled solves, and Newton finishes from there."""
-    d, F, P = path.displacement, path.force, path.positions
-    F0, F1 = F[i - 1], F[i]
-    s = F0 / (F0 - F1)
-    apex = probe.control.node
-    z0 = probe.X[apex, 1]
-    lo, hi = min(d[i - 1], d[i]), max(d[i - 1], d[i])
-    pad = 1e-6 * (hi - lo) + 1e-12
-
-    def inside(pos):
-        return lo - pad <= z0 - pos[apex, 1] <= hi + pad
-
-    guess = (1 - s) * P[i - 1] + s * P[i]
-    try:
-        pos, _ = st.solve_equilibrium(guess, node=None)
-        if inside(pos):
-            return pos
-    except ConvergenceError:
-        pass
-    tol_F = 1e-9 * max(abs(F0), abs(F1))
-    x, guess = zero_force_displacement(probe, d[i - 1], d[i], P[i - 1], P[i], F0, F1, tol_F)
-    pos, _ = st.solve_equilibrium(guess, node=None)
-    if not inside(pos):
-        raise ConvergenceError("the zero-force state left its path bracket")
-    return pos
-
-
-def _end_tangent_angle(base_pos):
-    """Signed angle (degrees) from the first to the last base edge; > 0 when the base curls
-    toward +z, the side the arch started on."""
-    e0 = base_pos[1] - base_pos[0]
-    e1 = base_pos[-1] - base_pos[-2]
-    a = math.atan2(e1[1], e1[0]) - math.atan2(e0[1], e0[0])
-    a = (a + math.pi) % (2 * math.pi) - math.pi
-    return math.degrees(a)
-
-
-def _chord_angle(base_pos):
-    """Signed angle (degrees) from the base's start tangent (first edge) to its chord (first
-    to last node): theta_end, theta / 2 for a symmetric base."""
-    e0 = base_pos[1] - base_pos[0]
-    c = base_pos[-1] - base_pos[0]
-    a = math.atan2(c[1], c[0]) - math.atan2(e0[1], e0[0])
-    a = (a + math.pi) % (2 * math.pi) - math.pi
-    return math.degrees(a)
 
 
 def _self_standing(g, model, pos_iii, nodes, tie, tie_stiffness):

@@ -35,10 +35,11 @@ FAILED = (NOT_CONVERGED, INVALID_GEOMETRY, TIMEOUT)
 
 def status_code(status: str) -> int:
     """The code of a status text: its name, or the name its words start with ("timeout: ...",
-    "second state unstable: ..."); anything else is a failed computation (not_converged)."""
+    "second state unstable: ...", "monostable: unit 2: ..."); anything else is a failed
+    computation (not_converged)."""
     if status in CODE:
         return CODE[status]
-    for name in ("timeout", "second_state_unstable"):
+    for name in ("timeout", "second_state_unstable", "monostable", "invalid_geometry"):
         if status.startswith(name.replace("_", " ")):
             return CODE[name]
     return NOT_CONVERGED

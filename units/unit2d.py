@@ -51,17 +51,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from snapmorph.units.frame3d import (
-    JOINT_LENGTH_DEFAULT,
-    PETG_NU,
-    Mesh3D,
-    UnitGeometry,
-    arch_profile,
-    end_tangent_angle,
-    segment_points,
-)
-from snapmorph.units.planar import ReleasedMetrics
+from snapmorph.units.frame3d import JOINT_LENGTH_DEFAULT, PETG_NU, Mesh3D, UnitGeometry
+from snapmorph.units.planar import check_flag, check_steps
 from snapmorph.units.push3d import level, push_through, record_release, relax_released, transfer_state
+from snapmorph.units.result import UnitResultBase
+from snapmorph.units.shapes import arch_height, cumulative_length, end_tangent_angle, segment_points
 
 __all__ = ["Unit2DModel", "Unit2DResult", "build_unit_mesh_2d", "build_unit_2d",
            "simulate_unit_2d", "edge_metrics", "DEFAULT_NODES_2D", "SIDES"]
@@ -130,8 +124,7 @@ def _arch_raised(x0, span, h, spacing, joint_length, w, overlaps):
     (start, stop) slice of the nodes the actuator moves as one, [first, stop) of the edges
     of the crossing made rigid (empty for "elastic"))."""
     xs = np.linspace(x0, x0 + span, 8001)
-    z = arch_profile(xs, x0, span, h)
-    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(xs), np.diff(z)))])
+    s = cumulative_length(xs, arch_height(xs, x0, span, h))
     total = s[-1]
     s_act = float(np.interp(x0 + 0.5 * span, xs, s))
     half = 0.5 * joint_length
@@ -214,7 +207,7 @@ def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float
         if x0 > 0.5 * w * (1 + 1e-12) else np.array([0.0, x0])
     raised, act, (lo, hi), stiff = _arch_raised(x0, span, g.h, spacing, jl, w, overlaps)
     u = np.concatenate([flat[:-1], raised, L - flat[:-1][::-1]])
-    zz = arch_profile(u, x0, span, g.h)
+    zz = arch_height(u, x0, span, g.h)
     c = np.full_like(u, 0.5 * L)
     arches = {
         "x": mesh.add_rod("arch_x", np.stack([u, c, zz], 1), w, t),
@@ -273,10 +266,10 @@ def edge_metrics(points) -> dict:
             "curvature": math.radians(theta) / arc, "sag": sag}
 
 
-@dataclass
-class Unit2DResult(ReleasedMetrics):
+@dataclass(repr=False)
+class Unit2DResult(UnitResultBase):
     """Metrics of the 2-D unit (SI; NaN where absent): F_cr, d_cr, d_unstable, d_second,
-    bistable as the planar unit; ``edges[state][side]`` = `edge_metrics` of each side;
+    bistable as the planar unit (`units.result.UnitResultBase`); ``edges[state][side]`` = `edge_metrics` of each side;
     ``shapes[state]`` = {side or "arch_x"/"arch_y": (n, 3) positions}.
 
     bistable: state (iii) exists and is stable with the actuator unloaded (no negative
@@ -299,23 +292,12 @@ class Unit2DResult(ReleasedMetrics):
     """
 
     geometry: UnitGeometry
-    status: str
-    bistable: bool = False
-    F_cr: float = NAN
-    d_cr: float = NAN
-    d_unstable: float = NAN
-    d_second: float = NAN
     edges: dict = field(default_factory=dict)
-    curve: tuple = (np.zeros(0), np.zeros(0))
-    shapes: dict = field(default_factory=dict)
     path_status: str = ""
     exact_states: bool = False
-    solve_time: float = NAN
-    n_nodes: int = 0
-    self_standing: bool | None = None
-    released: dict = field(default_factory=dict)
-    reason: str = ""
-    stability: dict = field(default_factory=dict)
+
+    STATE_KEYS = ("curvature",)
+    MORE_KEYS = ("curvature_released",)
 
     @property
     def curvature_released(self) -> float:
@@ -325,27 +307,20 @@ class Unit2DResult(ReleasedMetrics):
     @property
     def theta_deg(self) -> float:
         """Mean over the four sides of theta in state (iii), degrees (NaN if absent)."""
-        e = self.edges.get("iii")
-        return float(np.mean([e[s]["theta_deg"] for s in SIDES])) if e else NAN
+        return _side_mean(self.edges.get("iii"), "theta_deg")
 
     @property
     def curvature(self) -> float:
         """Mean over the four sides of the mean curvature in state (iii), 1/m."""
-        e = self.edges.get("iii")
-        return float(np.mean([e[s]["curvature"] for s in SIDES])) if e else NAN
+        return _side_mean(self.edges.get("iii"), "curvature")
 
     @property
     def S(self) -> float:
         """Mean over the four sides of the corner-to-corner chord in state (iii), m."""
-        e = self.edges.get("iii")
-        return float(np.mean([e[s]["S"] for s in SIDES])) if e else NAN
+        return _side_mean(self.edges.get("iii"), "S")
 
-    def summary(self) -> dict:
-        out = {k: getattr(self, k) for k in ("status", "bistable", "F_cr", "d_cr",
-                                             "d_unstable", "d_second", "S", "theta_deg",
-                                             "curvature", "self_standing", "S_released",
-                                             "theta_released_deg", "curvature_released",
-                                             "reason", "solve_time", "n_nodes")}
+    def _summary_details(self) -> dict:
+        out = {}
         for side, m in self.edges.get("iii", {}).items():
             for k, v in m.items():
                 out[f"{side}_{k}"] = v
@@ -353,6 +328,11 @@ class Unit2DResult(ReleasedMetrics):
             for k, v in m.items():
                 out[f"{side}_{k}_released"] = v
         return out
+
+
+def _side_mean(edges, key) -> float:
+    """Mean over the four sides of ``edges[side][key]`` (NaN without edges)."""
+    return float(np.mean([edges[s][key] for s in SIDES])) if edges else NAN
 
 
 def _state_shapes(model: Unit2DModel, pos) -> dict:
@@ -364,8 +344,7 @@ def _state_shapes(model: Unit2DModel, pos) -> dict:
 
 
 def _mean_metrics(edges: dict) -> dict:
-    return {k: float(np.mean([edges[s][k] for s in SIDES])) for k in ("S", "theta_deg",
-                                                                     "curvature")}
+    return {k: _side_mean(edges, k) for k in ("S", "theta_deg", "curvature")}
 
 
 def released_supports_2d(model: Unit2DModel):
@@ -427,17 +406,13 @@ def simulate_unit_2d(g: UnitGeometry, nodes: int | None = None, nu: float = PETG
     (default) or "rigid" w x w overlaps (module docstring). Arguments are validated
     (ValueError naming the parameter); failures of the solve come back in ``status``."""
     nodes = DEFAULT_NODES_2D if nodes is None else nodes
-    if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) \
-            or not 1 <= steps <= 100000:
-        raise ValueError(f"steps (first step = 3 h / steps) must be an integer in [1, 100000]; "
-                         f"got {steps!r}")
-    for name, flag in (("critical", critical), ("check_self_standing", check_self_standing)):
-        if not isinstance(flag, (bool, np.bool_)):
-            raise ValueError(f"{name} must be True or False; got {flag!r}")
+    check_steps(steps)
+    critical = check_flag("critical", critical)
+    check_self_standing = check_flag("check_self_standing", check_self_standing)
     t0 = time.perf_counter()
     model = build_unit_2d(g, nodes=nodes, nu=nu, overlaps=overlaps)
     out = push_through(model.structure, model.push_node, 3.0 * g.h, steps=int(steps),
-                       critical=bool(critical))
+                       critical=critical)
     r = Unit2DResult(g, out.status, bistable=out.bistable, F_cr=out.F_cr, d_cr=out.d_cr,
                      d_unstable=out.d_unstable, d_second=out.d_second, curve=out.curve,
                      path_status=out.path_status, exact_states=out.exact_states,

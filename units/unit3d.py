@@ -47,13 +47,13 @@ from snapmorph.units.frame3d import (
     Mesh3D,
     UnitGeometry,
     arch_nodes_x,
-    arch_profile,
-    end_tangent_angle,
-    segment_points,
 )
-from snapmorph.units.planar import ReleasedMetrics
-from snapmorph.units.push3d import (PushOutcome, level, push_through, record_release, relax_released,
-                          transfer_state)
+from snapmorph.units.planar import check_flag, check_steps
+from snapmorph.units.push3d import (level, push_through, record_release, relax_released,
+                                    transfer_state)
+from snapmorph.units.push_through import PushOutcome
+from snapmorph.units.result import UnitResultBase
+from snapmorph.units.shapes import arch_height, end_tangent_angle, segment_points
 
 __all__ = ["Unit3DModel", "Unit3DResult", "build_unit_mesh_3d", "build_unit_3d",
            "simulate_unit_3d", "DEFAULT_NODES_3D"]
@@ -259,7 +259,7 @@ def build_unit_mesh_3d(
     raised, act, (lo, hi) = arch_nodes_x(end_x[-1], L - end_x[-1], x0, g.arch_span, g.h,
                                          spacing, x_act, jl)
     arch_x = np.concatenate([end_x[:-1], raised, L - end_x[:-1][::-1]])
-    z = arch_profile(arch_x, x0, g.arch_span, g.h)
+    z = arch_height(arch_x, x0, g.arch_span, g.h)
     z[:n_end] = 0.0  # the bonded edge across x0 lies on the base (as the planar unit)
     z[-n_end:] = 0.0
     a = math.radians(tilt)
@@ -323,11 +323,11 @@ def build_unit_3d(g: UnitGeometry, nodes: int = DEFAULT_NODES_3D, **options) -> 
     return model
 
 
-@dataclass
-class Unit3DResult(ReleasedMetrics):
+@dataclass(repr=False)
+class Unit3DResult(UnitResultBase):
     """Metrics of the 3-D unit, SI (N, m, degrees), NaN where absent. The planar
-    `UnitResult`'s metrics (F_cr, d_cr, d_unstable, d_second, S, theta_deg, bistable, shapes)
-    plus the out-of-plane ones:
+    `UnitResult`'s metrics (`units.result.UnitResultBase`: F_cr, d_cr, d_unstable, d_second,
+    bistable, shapes, ...; S, theta_deg) plus the out-of-plane ones:
 
     arch_tilt_deg: {"i", "ii", "iii"} -> equivalent tilt of the arch about x (`arch_lean_deg`:
     asin of its largest sideways offset from the plane of its feet over h; degrees, > 0
@@ -361,36 +361,19 @@ class Unit3DResult(ReleasedMetrics):
     """
 
     geometry: UnitGeometry
-    status: str
     imperfection: dict = field(default_factory=dict)
-    bistable: bool = False
-    F_cr: float = NAN
-    d_cr: float = NAN
-    d_unstable: float = NAN
-    d_second: float = NAN
     S: float = NAN
     theta_deg: float = NAN
     arch_tilt_deg: dict = field(default_factory=dict)
     rail_twist_deg: dict = field(default_factory=dict)
     arch_lateral: dict = field(default_factory=dict)
-    curve: tuple = (np.zeros(0), np.zeros(0))
     base_shape: np.ndarray = field(default_factory=lambda: np.full((0, 3), np.nan))
-    shapes: dict = field(default_factory=dict)
     reference: dict = field(default_factory=dict)
     path_status: str = ""
     exact_states: bool = False
-    solve_time: float = NAN
-    n_nodes: int = 0
-    self_standing: bool | None = None
-    released: dict = field(default_factory=dict)
-    reason: str = ""
-    stability: dict = field(default_factory=dict)
 
-    def summary(self) -> dict:
-        keys = ("status", "bistable", "F_cr", "d_cr", "d_unstable", "d_second", "S",
-                "theta_deg", "self_standing", "S_released", "theta_released_deg", "reason",
-                "solve_time", "n_nodes")
-        out = {k: getattr(self, k) for k in keys}
+    def _summary_details(self) -> dict:
+        out = {}
         for name in ("arch_tilt_deg", "rail_twist_deg", "arch_lateral"):
             for state, v in getattr(self, name).items():
                 out[f"{name}_{state}"] = v
@@ -438,20 +421,6 @@ def unit3d_metrics(model: Unit3DModel, positions) -> dict:
         "arch_tilt_deg": arch_lean_deg(arch, model.mesh.named["h"], foot, len(arch) - 1 - foot),
         "arch_lateral": float(np.max(np.abs(arch[:, 1] - X[model.arch, 1]))),
     }
-
-
-def _check_flag(name, value):
-    if not isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be True or False; got {value!r}")
-    return bool(value)
-
-
-def _check_steps(steps):
-    if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) \
-            or not 1 <= steps <= 100000:
-        raise ValueError(f"steps (first step = 3 h / steps) must be an integer in [1, 100000]; "
-                         f"got {steps!r}")
-    return int(steps)
 
 
 def released_supports(model: Unit3DModel):
@@ -533,9 +502,9 @@ def simulate_unit_3d(
     for a unit that can be built: failures come back in ``status`` and ``reason``.
     """
     nodes = DEFAULT_NODES_3D if nodes is None else nodes
-    steps = _check_steps(steps)
-    critical = _check_flag("critical", critical)
-    check_self_standing = _check_flag("check_self_standing", check_self_standing)
+    steps = int(check_steps(steps))
+    critical = check_flag("critical", critical)
+    check_self_standing = check_flag("check_self_standing", check_self_standing)
     t0 = time.perf_counter()
     options = dict(nodes=nodes, tilt_deg=tilt_deg, apex_offset=apex_offset,
                    actuator_offset=actuator_offset, nu=nu, bar_divisions=bar_divisions,

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from unit_checks import assert_supports_hold_only_rigid_motion
+from unit_checks import assert_supports_hold_only_rigid_motion, require_solver_3d as _solver
 from snapmorph.units.frame3d import UnitGeometry
 from snapmorph.units.unit2d import SIDES, build_unit_mesh_2d, edge_metrics
 
@@ -171,35 +171,16 @@ def test_rigid_overlaps_are_thick_edges_over_the_w_by_w_squares():
 
 
 # --------------------------------------------------------------------------- with the solver
-def _solver():
-    try:
-        from snapmorph.solver import Structure3D  # noqa: F401
-    except ImportError:  # pragma: no cover
-        pytest.skip("solver.Structure3D is not available")
-
-
 G40 = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
 
 
 @pytest.fixture(scope="module")
 def tall21():
+    """The tall 2-D unit pushed through at 21 nodes per side (the tests below share it)."""
     _solver()
     from snapmorph.units.unit2d import simulate_unit_2d
 
     return simulate_unit_2d(G40, nodes=21)
-
-
-def test_tall_2d_unit_is_bistable_with_four_equal_curled_sides(tall21):
-    r = tall21
-    assert r.status == "ok" and r.bistable and r.exact_states
-    assert 0 < r.d_cr < r.d_unstable < r.d_second
-    sides = r.edges["iii"]
-    thetas = np.array([sides[s]["theta_deg"] for s in SIDES])
-    assert np.all(thetas > 1.0)  # the corners rise: each side curls toward the arches' side
-    assert np.ptp(thetas) < 1e-6 * np.max(thetas)  # the square's symmetry is kept
-    for s in SIDES:
-        m = sides[s]
-        assert m["S"] < G40.L and m["curvature"] > 0 and m["sag"] > 0
 
 
 def test_tall_2d_unit_released_state(tall21):
@@ -233,6 +214,19 @@ def test_tall_2d_unit_released_state(tall21):
     s = r.summary()
     assert s["self_standing"] is True and s["theta_released_deg"] == r.theta_released_deg
     assert s["south_theta_deg_released"] == rel["edges"]["south"]["theta_deg"]
+
+
+def test_tall_2d_unit_is_bistable_with_four_equal_curled_sides(tall21):
+    r = tall21
+    assert r.status == "ok" and r.bistable and r.exact_states
+    assert 0 < r.d_cr < r.d_unstable < r.d_second
+    sides = r.edges["iii"]
+    thetas = np.array([sides[s]["theta_deg"] for s in SIDES])
+    assert np.all(thetas > 1.0)  # the corners rise: each side curls toward the arches' side
+    assert np.ptp(thetas) < 1e-6 * np.max(thetas)  # the square's symmetry is kept
+    for s in SIDES:
+        m = sides[s]
+        assert m["S"] < G40.L and m["curvature"] > 0 and m["sag"] > 0
 
 
 def test_released_supports_hold_only_rigid_motion():

@@ -8,8 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from unit_checks import assert_supports_hold_only_rigid_motion, make_second_state_unstable
-from snapmorph.units.frame3d import UnitGeometry, end_tangent_angle
+from unit_checks import (assert_supports_hold_only_rigid_motion, make_second_state_unstable,
+                         require_solver_3d as _solver)
+from snapmorph.units.frame3d import UnitGeometry
+from snapmorph.units.shapes import end_tangent_angle
 from snapmorph.units.planar import simulate_unit
 from snapmorph.units.unit3d import (
     STIFF_PLATE_FACTOR,
@@ -289,13 +291,6 @@ def test_section_rotation_and_end_tangent_angle_closed_forms():
 
 
 # --------------------------------------------------------------------------- with the solver
-def _solver():
-    try:
-        from snapmorph.solver import Structure3D  # noqa: F401
-    except ImportError:  # pragma: no cover - before issue 13 lands
-        pytest.skip("solver.Structure3D is not available")
-
-
 @pytest.fixture(scope="module")
 def perfect21():
     _solver()
