@@ -113,7 +113,7 @@ class _Mgdc:
             self.monitor.start(PathState(self.q.copy(), 0.0, self.d, neg0, neg0, 1.0, 1.0,
                                          system.energy))
         self.s = s0
-        self.s_max = 8.0 * s0 if o["max_step"] is None else o["max_step"]
+        self.s_max = self.s_max0 = 8.0 * s0 if o["max_step"] is None else o["max_step"]
         self.sign = 1.0
         self.step_prev = None
         self.status = "ok"
@@ -121,6 +121,7 @@ class _Mgdc:
         self.rejected = 0
         self.total_iterations = 0
         self.travelled = 0.0  # sum of |dd| along the path, m (wandering guard)
+        self.arc = 0.0  # the path's length so far in the step norm (reduced DOFs), m
 
     def node_component(self, u):
         """The pushed node's component along the direction of a reduced vector ``u``."""
@@ -311,6 +312,9 @@ class _Mgdc:
         if self.travelled > WANDER * distance:
             self.status = _wandering(rec, self.travelled, distance)
             return False
+        self.arc += float(np.linalg.norm(self.step_prev))
+        if self.o["max_step"] is None:  # the control may let the steps grow with the path
+            self.s_max = self.control.max_step(self.s_max0, self.arc)
         target = self.o["target_iterations"]
         if it <= target - 1:
             self.s = min(1.5 * self.s, self.s_max)

@@ -173,6 +173,11 @@ class Control:
         """Is the path's target reached at displacement ``d`` (m)?"""
         return not d < self.distance
 
+    def max_step(self, s_max, arc) -> float:
+        """The cap of the driver's step norm after a path of length ``arc`` (its norm, m):
+        a push keeps the driver's own (``s_max``, from its distance)."""
+        return s_max
+
     def landing(self, lam_prev, lam_new, unit_N):
         """The load factor to land the last step on exactly, or None (a push lands
         nowhere: it ends at the first state past its distance)."""
