@@ -319,3 +319,39 @@ def test_materials_carry_their_datasheet_values():
     st.add_gravity(PETG)
     weight = PETG.density * 9.81 * W * T_CANT * L
     assert st.total_dead_load() == pytest.approx(weight, rel=1e-12)
+
+
+def test_every_driver_sees_the_dead_loads():
+    """The loads live in the assembled energy, so Newton equilibrium, the displacement
+    probes, the stability counts and the 3-D energy descent need no special case: a tip
+    load P0 held by a prescribed tip displacement is a reaction (F = F_free - P0, same
+    state); the equilibrium solve and the descent land where follow_load does."""
+    from snapmorph.solver.stability import state_stability
+
+    n = 41
+    s = np.linspace(0.0, L, n)
+    st = Structure()
+    rod = st.add_rod(np.stack([s, 0 * s], 1), width=W, thickness=T_CANT, E=E)
+    st.clamp(0, toward=1)
+    tip = rod.nodes[-1]
+    P0 = 0.5 * EI / L**2
+    free_probe = DisplacementProbe(st, tip)
+    guess = st.reference_positions.copy()
+    pos_free, F_free, _ = free_probe.solve(guess, 0.3 * L)
+    st.add_load(tip, (0.0, -P0))
+    pos, F, neg = DisplacementProbe(st, tip).solve(guess, 0.3 * L)
+    assert F == pytest.approx(F_free - P0, rel=1e-9)
+    assert np.max(np.abs(pos - pos_free)) < 1e-9 * L
+    st.add_gravity(PAPER_PETG, g=200.0)  # q L^3 / EI = 1.3
+    loaded = st.follow_load(1.0)
+    assert loaded.status == "ok"
+    end = loaded.positions[-1]
+    again, info = st.solve_equilibrium(end)
+    assert info["iterations"] <= 1 and np.max(np.abs(again - end)) < 1e-12 * L
+    stab = state_stability(st, end, tip)
+    assert stab.negative_force == 0 == stab.negative_displacement
+    # 3-D: the energy descent (Structure3D.relax) from the stress-free state
+    st3 = heavy_cantilever(41, 0.5, three_d=True)
+    q, _ = st3.relax()
+    p3 = st3.follow_load(1.0)
+    assert np.max(np.abs(st3.positions_of(q) - p3.positions[-1])) < 1e-9 * L
