@@ -52,7 +52,8 @@ def density_for(alpha, area=W * T):
 
 def heavy_cantilever(n_nodes, alpha, three_d=False):
     """The cantilever of ``n_nodes`` nodes from s = 0 to L along x, clamped at node 0, with
-    its self-weight set to q L^3 / EI = ``alpha`` (along -z). Returns the structure."""
+    its self-weight set to q L^3 / EI = ``alpha`` (along -z; 0: weightless). Returns the
+    structure (its tip is node n_nodes - 1)."""
     s = np.linspace(0.0, L, n_nodes)
     if three_d:
         st = Structure3D()
@@ -62,7 +63,8 @@ def heavy_cantilever(n_nodes, alpha, three_d=False):
         st = Structure()
         rod = st.add_rod(np.stack([s, 0 * s], 1), width=W, thickness=T, E=E)
     st.clamp(rod.nodes[0], toward=rod.nodes[1])
-    st.add_gravity(density_for(alpha), g=G)
+    if alpha:
+        st.add_gravity(density_for(alpha), g=G)
     return st
 
 
