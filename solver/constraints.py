@@ -62,9 +62,9 @@ def bandwidth(*element_dofs) -> int:
 class ConstrainedStructure:
     """Nodes, supports and shared displacements of a rod structure (see module doc).
 
-    A subclass sets ``dim``, ``component_names``, ``component_choices`` (how `fix`
-    names the components it accepts) and ``gravity_direction``, appends each rod to
-    ``rods`` and its (N, dim) node positions to ``_positions``, and implements
+    A subclass sets ``dim``, ``component_names`` and ``component_choices`` (how `fix`
+    names the components it accepts), gives `add_gravity` its default direction, appends
+    each rod to ``rods`` and its (N, dim) node positions to ``_positions``, and implements
     ``reduced_system`` (with the dead loads of `_system_loads` unless asked not to),
     ``_max_bending_stiffness`` and ``_edge_areas``; structures with extra internal nodes
     (planar clamps' ghosts) extend ``_n_total``, ``_share_extra``, ``_hold_extra`` and
@@ -73,7 +73,6 @@ class ConstrainedStructure:
     dim = 0
     component_names = ""
     component_choices = ""
-    gravity_direction: tuple = ()
 
     def __init__(self):
         self.rods: list = []
@@ -167,12 +166,13 @@ class ConstrainedStructure:
                              f"vector in N; got {force!r}")
         self._point_loads.append((node, f))
 
-    def add_gravity(self, density, g=9.81, direction=None, rods=None):
+    def add_gravity(self, density, g, direction, rods=None):
         """Self-weight: every rod edge's weight rho A |e_bar| g, half on each of its nodes
         (consistent nodal loads of a uniform weight per length; each edge its own section
         area A, so a rod of varying section weighs what it should). ``density``: kg/m^3, or
         a `solver.materials.Material` (its density); ``g`` (m/s^2, >= 0); ``direction``:
-        the way gravity pulls (default -z: (0, -1) planar, (0, 0, -1) 3-D; normalised);
+        the way gravity pulls (the subclasses' default -z: (0, -1) planar, (0, 0, -1) 3-D;
+        normalised);
         ``rods``: the rods (or their indices) that weigh (default all; call again with
         another density for rods of another material). Nodes that are tied or in a rigid
         group keep their own share: it acts on their group's DOFs through W, as the
@@ -184,8 +184,7 @@ class ConstrainedStructure:
             raise ValueError(f"density must be finite and > 0 kg/m^3; got {density!r}")
         if not (np.isfinite(g) and g >= 0.0):
             raise ValueError(f"g must be finite and >= 0 m/s^2; got {g!r}")
-        n = real_array(self.gravity_direction if direction is None else direction,
-                       "direction").reshape(-1)
+        n = real_array(direction, "direction").reshape(-1)
         if n.shape != (self.dim,) or not np.all(np.isfinite(n)) or not np.any(n != 0.0):
             raise ValueError(f"direction must be a finite non-zero "
                              f"({', '.join(self.component_names)}) vector; got {direction!r}")

@@ -108,7 +108,6 @@ class Structure(ConstrainedStructure):
     dim = 2  # components per node position (x, z)
     component_names = "xz"
     component_choices = "'x', 'z' or 'xz'"
-    gravity_direction = (0.0, -1.0)  # `add_gravity`'s default: -z
 
     def __init__(self):
         super().__init__()
@@ -286,6 +285,11 @@ class Structure(ConstrainedStructure):
                 new.clamp(c["node"], toward=c["toward"], hold_position=c["hold_position"])
         self._copy_loads_to(new)
         return new
+
+    def add_gravity(self, density, g=9.81, direction=(0.0, -1.0), rods=None):
+        """Self-weight along ``direction`` (default -z); see
+        `solver.constraints.ConstrainedStructure.add_gravity`."""
+        super().add_gravity(density, g, direction, rods)
 
     def fix(self, node, components="xz"):
         """Hold the displacement of ``node`` at zero in "x", "z" or "xz".

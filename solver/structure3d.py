@@ -132,7 +132,6 @@ class Structure3D(ConstrainedStructure):
     dim = 3
     component_names = "xyz"
     component_choices = "a non-empty subset of 'xyz' such as 'xz'"
-    gravity_direction = (0.0, 0.0, -1.0)  # `add_gravity`'s default: -z
 
     def __init__(self):
         super().__init__()
@@ -296,6 +295,11 @@ class Structure3D(ConstrainedStructure):
             raise IndexError(node)
         rod = self.rods[r]
         return rod, int(node - rod.nodes[0])
+
+    def add_gravity(self, density, g=9.81, direction=(0.0, 0.0, -1.0), rods=None):
+        """Self-weight along ``direction`` (default -z); see
+        `solver.constraints.ConstrainedStructure.add_gravity`."""
+        super().add_gravity(density, g, direction, rods)
 
     def fix(self, node, components="xyz"):
         """Hold the displacement of ``node`` at zero in any subset of "x", "y", "z"."""
