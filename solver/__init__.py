@@ -15,7 +15,10 @@ Layers, each importing only those below it:
 - drivers: Newton equilibrium (`equilibrium`), displacement control (`displacement`) and
   MGDC (`mgdc`), sharing path recording (`path`) and step control (`steps`); critical
   points and branch switching (`branching`), stability (`stability`), single states at a
-  prescribed displacement (`states`).
+  prescribed displacement (`states`); dead loads followed by a load factor (`loading`).
+
+Dead loads and self-weight (`Structure.add_load`, `add_gravity`) are energy terms of every
+system (docs/loads.md); materials with datasheet presets are in `materials`.
 
 The paper's bistable unit is built on top, in `snapmorph.units`.
 """
@@ -29,9 +32,10 @@ from snapmorph.solver.kernel_cache import discard_stale_kernels
 
 discard_stale_kernels()  # before any cached kernel is loaded (see solver.kernel_cache)
 
+from snapmorph.solver.materials import Material  # noqa: E402
 from snapmorph.solver.path import Path  # noqa: E402
 from snapmorph.solver.problem import ConvergenceError  # noqa: E402
 from snapmorph.solver.structure import Rod, Structure  # noqa: E402
 from snapmorph.solver.structure3d import Rod3D, Structure3D  # noqa: E402
 
-__all__ = ["Structure", "Rod", "Path", "ConvergenceError", "Structure3D", "Rod3D"]
+__all__ = ["Structure", "Rod", "Path", "ConvergenceError", "Structure3D", "Rod3D", "Material"]

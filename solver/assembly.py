@@ -10,6 +10,12 @@ Constraints enter through ``dof_map`` (the paper's constraint matrix W in index 
 DOF ``j = 2 node + c`` (c = 0 for x, 1 for z) maps to reduced DOF ``dof_map[j] >= 0``, or
 to ``-1`` when it is fixed or prescribed. Nodes that are tied or translate together share
 reduced DOFs, so ``K_red = W^T K W`` is assembled by scattering straight into the band.
+
+Dead loads (`assemble_dead_loads`, planar and 3-D alike) travel as one record ``loads`` =
+``(full DOFs (m,) int, reduced DOFs (m,) int (-1 held), forces (m,) N, stress-free
+coordinates (m,) m)``, one entry per loaded position coordinate: their potential
+``-f (x - X)`` joins the energy and ``-f`` the gradients, through the same DOF map, so the
+load on a tied or rigid-group node goes to its group's reduced DOF (``W^T f``).
 """
 
 from __future__ import annotations
@@ -17,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from snapmorph.solver.energies import bending_terms, spring_terms, stretch_terms
+from snapmorph.solver.energies import bending_terms, dead_load_terms, spring_terms, stretch_terms
 
 
 @njit(cache=True)
@@ -86,6 +92,40 @@ def assemble_system(q, elements, dofs, band, grad_red, grad_full):
         energy += spring_terms(x4, k, ox, oz, g4, h4)
         _scatter(nodes, spring_dofs[e], 4, g4, h4, band, grad_red, grad_full)
     return energy
+
+
+@njit(cache=True)
+def assemble_dead_loads(q, loads, grad_red, grad_full):
+    """Energy (J) of the dead loads ``loads`` (the record of the module doc) at the full
+    state ``q``; adds their gradient -f (N) into the reduced and the full gradient. No
+    stiffness: K is the elastic one. Loaded coordinates are positions (3-D rods: reduced
+    position DOFs are unscaled, ``dof_scale`` 1)."""
+    full, red, force, ref = loads
+    energy = 0.0
+    for k in range(full.shape[0]):
+        j = full[k]
+        e, g = dead_load_terms(q[j], force[k], ref[k])
+        energy += e
+        grad_full[j] += g
+        r = red[k]
+        if r >= 0:
+            grad_red[r] += g
+    return energy
+
+
+def no_loads():
+    """The empty dead-load record (a structure without loads)."""
+    none = np.zeros(0, dtype=np.int64)
+    return none, none.copy(), np.zeros(0), np.zeros(0)
+
+
+def load_record(full_dofs, forces, ref, dof_map):
+    """The dead-load record of `assemble_dead_loads` for the full DOFs ``full_dofs`` with
+    forces ``forces`` (N) and stress-free coordinates ``ref`` (m) under ``dof_map``."""
+    full = np.ascontiguousarray(full_dofs, dtype=np.int64)
+    red = np.ascontiguousarray(np.asarray(dof_map)[full], dtype=np.int64)
+    return (full, red, np.ascontiguousarray(forces, dtype=float),
+            np.ascontiguousarray(ref, dtype=float))
 
 
 def total_energy(q, elements):

@@ -465,10 +465,9 @@ class BranchMonitor:
     # ------------------------------------------------------------------ switching
     @property
     def control_axis(self):
-        """The state component the push moves (an axis-aligned push), else None."""
-        n = self.control.direction
-        axes = [k for k in range(len(n)) if abs(abs(n[k]) - 1.0) < 1e-12]
-        return axes[0] if axes else None
+        """The state component the push moves (an axis-aligned push), else None (no rig:
+        an oblique push, or dead loads followed)."""
+        return self.control.rig_axis
 
     @property
     def held_system(self):

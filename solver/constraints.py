@@ -2,20 +2,25 @@
 
 Nodes and their stress-free positions, supports (components held at zero displacement),
 exact ties and rigid groups (nodes that share displacements: supernodes), node checks,
-the position DOFs of the state vector, the scales the drivers take tolerances from, and the
-push experiment on the shared drivers. `solver.structure.Structure` and
+the position DOFs of the state vector, the scales the drivers take tolerances from, dead
+loads (point loads and self-weight, docs/loads.md), and the experiments on the shared
+drivers: the push and the load-controlled path. `solver.structure.Structure` and
 `solver.structure3d.Structure3D` add their rods, elements and DOF ordering; together they
 provide the problem interface `solver.problem.PushProblem` (docs/problem-interface.md).
 """
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from snapmorph.solver.displacement import follow_displacement
 from snapmorph.solver.equilibrium import equilibrium
+from snapmorph.solver.loading import follow_load
+from snapmorph.solver.materials import Material
 from snapmorph.solver.mgdc import follow_mgdc
-from snapmorph.solver.problem import make_control
+from snapmorph.solver.problem import ConvergenceError, make_control, real_array, real_scalar
 
 
 class UnionFind:
@@ -58,10 +63,12 @@ class ConstrainedStructure:
     """Nodes, supports and shared displacements of a rod structure (see module doc).
 
     A subclass sets ``dim``, ``component_names`` and ``component_choices`` (how `fix`
-    names the components it accepts), appends each rod to ``rods`` and its (N, dim) node
-    positions to ``_positions``, and implements ``reduced_system`` and
-    ``_max_bending_stiffness``; structures with extra internal nodes (planar clamps'
-    ghosts) extend ``_n_total``, ``_share_extra`` and ``_hold_extra``."""
+    names the components it accepts), gives `add_gravity` its default direction, appends
+    each rod to ``rods`` and its (N, dim) node positions to ``_positions``, and implements
+    ``reduced_system`` (with the dead loads of `_system_loads` unless asked not to),
+    ``_max_bending_stiffness`` and ``_edge_areas``; structures with extra internal nodes
+    (planar clamps' ghosts) extend ``_n_total``, ``_share_extra``, ``_hold_extra`` and
+    ``_complete_state``."""
 
     dim = 0
     component_names = ""
@@ -74,6 +81,10 @@ class ConstrainedStructure:
         self._merges: list[tuple[int, int]] = []
         self._rigid_groups: list[list[int]] = []
         self._cache = None
+        # dead loads: (node, force (dim,) N) and (rho g (N/m^3), unit direction, rod
+        # indices or None for all rods)
+        self._point_loads: list[tuple[int, np.ndarray]] = []
+        self._gravity: list[tuple[float, np.ndarray, tuple | None]] = []
 
     # ------------------------------------------------------------------ nodes
     @property
@@ -141,6 +152,128 @@ class ConstrainedStructure:
         for a, b in zip(nodes[:-1], nodes[1:]):
             self._merges.append((a, b))
         self._cache = None
+
+    # ------------------------------------------------------------------ dead loads
+    def add_load(self, node, force):
+        """A dead load: the constant force ``force`` (N, a vector of the structure's
+        dimension, e.g. (0, -2.0)) on ``node``, acting through every push and path; loads
+        on one node add up. `follow_load` follows all dead loads times one load factor;
+        `push` starts from the equilibrium under them at full value."""
+        node = self.check_node(node)
+        f = real_array(force, "force (N)").reshape(-1)
+        if f.shape != (self.dim,) or not np.all(np.isfinite(f)):
+            raise ValueError(f"force must be a finite ({', '.join(self.component_names)}) "
+                             f"vector in N; got {force!r}")
+        self._point_loads.append((node, f))
+
+    def add_gravity(self, density, g, direction, rods=None):
+        """Self-weight: every rod edge's weight rho A |e_bar| g, half on each of its nodes
+        (consistent nodal loads of a uniform weight per length; each edge its own section
+        area A, so a rod of varying section weighs what it should). ``density``: kg/m^3, or
+        a `solver.materials.Material` (its density); ``g`` (m/s^2, >= 0); ``direction``:
+        the way gravity pulls (the subclasses' default -z: (0, -1) planar, (0, 0, -1) 3-D;
+        normalised);
+        ``rods``: the rods (or their indices) that weigh (default all; call again with
+        another density for rods of another material). Nodes that are tied or in a rigid
+        group keep their own share: it acts on their group's DOFs through W, as the
+        gradient does; a supported component carries its share to the support."""
+        rho = density.density if isinstance(density, Material) else real_scalar(
+            density, "density", "kg/m^3")
+        g = real_scalar(g, "g", "m/s^2")
+        if not (np.isfinite(rho) and rho > 0.0):
+            raise ValueError(f"density must be finite and > 0 kg/m^3; got {density!r}")
+        if not (np.isfinite(g) and g >= 0.0):
+            raise ValueError(f"g must be finite and >= 0 m/s^2; got {g!r}")
+        n = real_array(direction, "direction").reshape(-1)
+        if n.shape != (self.dim,) or not np.all(np.isfinite(n)) or not np.any(n != 0.0):
+            raise ValueError(f"direction must be a finite non-zero "
+                             f"({', '.join(self.component_names)}) vector; got {direction!r}")
+        n = n / np.max(np.abs(n))
+        which = None
+        if rods is not None:
+            which = tuple(self._rod_index(r) for r in rods)
+        self._gravity.append((rho * g, n / np.linalg.norm(n), which))
+
+    def clear_loads(self):
+        """Remove every dead load (point loads and self-weight)."""
+        self._point_loads.clear()
+        self._gravity.clear()
+
+    def _rod_index(self, rod) -> int:
+        """The index of ``rod`` (a rod of this structure or its index), or a ValueError."""
+        if isinstance(rod, (int, np.integer)) and not isinstance(rod, (bool, np.bool_)):
+            if 0 <= int(rod) < len(self.rods):
+                return int(rod)
+        for k, r in enumerate(self.rods):
+            if r is rod:
+                return k
+        raise ValueError(f"rods must list rods of this structure or their indices "
+                         f"(0 .. {len(self.rods) - 1}); got {rod!r}")
+
+    def dead_loads(self) -> np.ndarray:
+        """(n_nodes, dim) N: the dead load on every node at load factor 1 (point loads and
+        self-weight), before any constraint."""
+        f = np.zeros((self.n_nodes, self.dim))
+        for node, force in self._point_loads:
+            f[node] += force
+        for rho_g, n, which in self._gravity:
+            for k in (range(len(self.rods)) if which is None else which):
+                nodes = self.rods[k].nodes
+                length = np.linalg.norm(np.diff(self._positions[k], axis=0), axis=1)
+                half = 0.5 * rho_g * self._edge_areas(k) * length  # N per node per edge
+                np.add.at(f, nodes[:-1], half[:, None] * n)
+                np.add.at(f, nodes[1:], half[:, None] * n)
+        return f
+
+    def _edge_areas(self, k) -> np.ndarray:
+        """(n_edges,) cross-section area (m^2) of each edge of rod ``k``."""
+        raise NotImplementedError
+
+    @property
+    def has_dead_loads(self) -> bool:
+        """Does any node carry a non-zero dead load?"""
+        return bool(self._point_loads or self._gravity) and bool(np.any(self.dead_loads()))
+
+    def total_dead_load(self) -> float:
+        """Sum over the nodes of the magnitude of their dead loads, N (the total weight
+        under self-weight alone): the force a load factor of 1 stands for."""
+        return float(np.sum(np.linalg.norm(self.dead_loads(), axis=1)))
+
+    def _system_loads(self, force_unit=1.0):
+        """The dead loads a system assembles: (full DOFs, forces in the system's units
+        (N / ``force_unit``), stress-free coordinates), or None when there are none."""
+        if not (self._point_loads or self._gravity):
+            return None
+        f = np.zeros(self.initial_state().shape[0])
+        f[: self.dim * self.n_nodes] = self.dead_loads().reshape(-1)
+        full = np.flatnonzero(f)
+        if full.size == 0:
+            return None
+        return full, f[full] / force_unit, self.initial_state()[full]
+
+    def _copy_loads_to(self, other):
+        """Give ``other`` (a copy of this structure's rods) the same dead loads."""
+        other._point_loads = [(node, f.copy()) for node, f in self._point_loads]
+        other._gravity = list(self._gravity)
+
+    def without_dead_loads(self):
+        """A shallow copy of the structure with no dead loads (its rods, supports and model
+        arrays shared): what `follow_load` hands the drivers, its loads in the load vector."""
+        other = copy.copy(self)
+        other._point_loads, other._gravity = [], []
+        return other
+
+    def path_state(self, path, index=-1) -> np.ndarray:
+        """The full state vector of row ``index`` of a path of this structure (positions,
+        and what the structure's state holds besides: planar clamps' ghosts, 3-D twists
+        in the canonical convention): a state any push, path or solve restarts from."""
+        q = self.initial_state()
+        q[: self.dim * self.n_nodes] = np.asarray(path.positions[index], dtype=float).reshape(-1)
+        self._complete_state(q, path, index)
+        return q
+
+    def _complete_state(self, q, path, index):
+        """Fill the state components past the node positions from a path row (none here)."""
 
     # ------------------------------------------------------------------ problem interface
     @property
@@ -210,10 +343,41 @@ class ConstrainedStructure:
 
     # ------------------------------------------------------------------ experiments
     def _push(self, node, direction, distance, method, options):
-        control = make_control(self, node, direction, distance, method)
+        start = self._loaded_start(options.pop("start", None), options)
+        control = make_control(self, node, direction, distance, method, start=start)
         if method == "mgdc":
             return follow_mgdc(self, control, **options)
         return follow_displacement(self, control, **options)
+
+    def _loaded_start(self, start, options):
+        """The state a push starts from: None (the stress-free state) for a structure
+        without dead loads and no ``start``; else ``start`` (positions or a full state) or
+        the end of `follow_load` to factor 1, polished by Newton under the dead loads at
+        full value. ConvergenceError when the structure does not carry its dead loads."""
+        if start is None and not self.has_dead_loads:
+            return None
+        if start is None:
+            loaded = self.follow_load(1.0, time_limit=options.get("time_limit"))
+            if loaded.status != "ok":
+                raise ConvergenceError(
+                    f"the structure does not carry its dead loads at full value: "
+                    f"follow_load(1.0) ended with status {loaded.status!r} (push from a state "
+                    f"of your own with start=...)")
+            start = self.path_state(loaded)
+        try:
+            return equilibrium(self, start, None, None, 0.0)[1]["state"]
+        except ConvergenceError as exc:
+            raise ConvergenceError(f"the push's start is no equilibrium under the dead "
+                                   f"loads: {exc}") from exc
+
+    def follow_load(self, max_factor=1.0, method="mgdc", **options):
+        """Follow every dead load (point loads and self-weight) times one load factor from
+        0 (the stress-free state, or ``start=``) to ``max_factor``, with MGDC: passes
+        limit points of the load factor (the load a structure snaps at) and records them.
+        Returns a `solver.path.Path` with ``load_factor`` and ``limit_load_factor``; see
+        `solver.loading.follow_load` for the options, the statuses and what the path's
+        displacement and force are."""
+        return follow_load(self, max_factor, method, **options)
 
     def _solve_equilibrium(self, positions, node, direction, force, options):
         return equilibrium(self, positions, node, direction, force, **options)

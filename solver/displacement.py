@@ -43,7 +43,8 @@ def follow_displacement(
     max_switches=8,
     time_limit=None,
 ):
-    """Prescribe the node's displacement along an axis from 0 to ``control.distance``.
+    """Prescribe the node's displacement along an axis from its start (0: the stress-free
+    state; ``control.d_start`` from a start state) to ``control.distance``.
 
     ``steps``: initial number of equal steps; steps are halved on failure and grow back
     (up to ``max_step`` m) when Newton converges quickly. ``stop(path_arrays)`` may end
@@ -73,29 +74,29 @@ class _Rig:
         self.length, fscale = structure.scales()
         self.fscale = fscale = fscale / fu  # forces below are in the system's units (N / fu)
         self.unit = load_unit(fscale)
-        self.q0 = structure.initial_state()
+        self.q0 = structure.initial_state()  # the prescribed displacements count from it
         self.held = control.member_dofs[:, axis]
-        self.q = self.q0.copy()
+        self.q = control.first_state(structure)
+        self.d = control.d_start
         self.rec = Recorder(structure, fu, system)
         system.evaluate(self.q)
         system.factor()
         neg = system.negative_eigenvalues
-        self.rec.add(0.0, 0.0, self.q, system.energy, 0, neg, neg)
-        self.dd0 = control.distance / o["steps"]
+        self.rec.add(self.d, 0.0, self.q, system.energy, 0, neg, neg)
+        self.dd0 = control.span() / o["steps"]
         self.monitor = None
         if critical:
             self.monitor = BranchMonitor(
                 structure, control, branch, self.tol, fscale, self.length,
                 nominal_step=self.dd0, switch_size=o["switch_size"],
                 max_switches=o["max_switches"], load_unit=self.unit,
-                rig_step=o["switch_size"] * control.distance / o["steps"], prefer_rig=True,
+                rig_step=o["switch_size"] * control.span() / o["steps"], prefer_rig=True,
                 driver_max_iter=self.max_iter, force_unit=fu, driver_system=system)
-            self.monitor.start(PathState(self.q.copy(), 0.0, 0.0, -1, neg, 0.0, 1.0,
+            self.monitor.start(PathState(self.q.copy(), 0.0, self.d, -1, neg, 0.0, 1.0,
                                          system.energy))
         self.dd_max = self.dd0 if o["max_step"] is None else o["max_step"]
         self.dd = self.dd0
-        self.d = 0.0
-        self.q_prev, self.d_prev = None, 0.0
+        self.q_prev, self.d_prev = None, self.d
         self.status = "ok"
         self.sign = control.direction[axis]
         self.turn_candidate = None

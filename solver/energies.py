@@ -10,6 +10,8 @@ Local coordinates are ordered ``[x0, z0, x1, z1, ...]`` in metres.
   (phi = signed turning angle, l_bar = reference Voronoi length)
 - tie spring, per node pair: ``E_k = 1/2 k |(x_a - x_b) - (X_a - X_b)|^2`` (zero-length
   spring on the relative displacement; the paper's "stiff springs")
+- dead load, per loaded coordinate (any dimension): ``E_f = -f (x - X)`` (the potential of
+  a constant force f on a coordinate x whose stress-free value is X; no stiffness)
 """
 
 from __future__ import annotations
@@ -218,3 +220,14 @@ def turning_curvature(x):
     b1 = x[5] - x[3]
     g = np.sqrt(a0 * a0 + b0 * b0) * np.sqrt(a1 * a1 + b1 * b1) + a0 * a1 + b0 * b1
     return 2.0 * (a0 * b1 - b0 * a1) / g
+
+
+@njit(cache=True, inline="always")
+def dead_load_terms(x, force, x_ref):
+    """Potential of a dead load on one coordinate: E = -f (x - X) (J) for a constant force
+    ``force`` (N) on the coordinate ``x`` (m) whose stress-free value is ``x_ref``.
+
+    Returns (E, dE/dx = -f); d2E/dx2 = 0: a dead load adds no stiffness. Measured from the
+    stress-free state, so that the potential stays of the size of the work done and the
+    energies the drivers compare keep their digits."""
+    return -force * (x - x_ref), -force

@@ -14,6 +14,9 @@ non-finite residual (nothing updated), 2 updated q (and lam).
 3-D rods apply the reduced increment ``du`` as ``q[j] += dof_scale[j] du[dof_map[j]]``
 (reduced twist DOFs are lengths, see `solver.system.RodSystem3D`); ``du_max`` is in reduced
 units, as the general path measures it.
+
+Every iteration assembles the structure's dead loads too (``loads``, the record of
+`solver.assembly.assemble_dead_loads`; empty when there are none: then nothing changes).
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from snapmorph.solver.assembly import assemble_system
+from snapmorph.solver.assembly import assemble_dead_loads, assemble_system
 from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws
 from snapmorph.solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
 
@@ -116,12 +119,22 @@ def mgdc_correction(lam, P, uP1, band, heights, grad, work, pivot_tol, tol_force
 
 
 @njit(cache=True)
-def newton_iteration(q, lam, P, elements, dofs, dof_map, band, heights, grad, grad_full,
-                     work, pivot_tol, tol_force):
+def with_dead_loads(q, loads, grad, grad_full, energy):
+    """``energy`` (J) plus the dead loads' potential, their gradient added (`loads` empty:
+    ``energy`` itself, nothing touched)."""
+    if loads[0].shape[0] == 0:
+        return energy
+    return energy + assemble_dead_loads(q, loads, grad, grad_full)
+
+
+@njit(cache=True)
+def newton_iteration(q, lam, P, elements, dofs, loads, dof_map, band, heights, grad,
+                     grad_full, work, pivot_tol, tol_force):
     """One Newton iteration at fixed load lam P (N). ``work`` is (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, energy)."""
-    energy = assemble_system(q, elements, dofs, band, grad, grad_full)
+    energy = with_dead_loads(q, loads, grad, grad_full,
+                             assemble_system(q, elements, dofs, band, grad, grad_full))
     status, neg, r_max = newton_correction(lam, P, band, heights, grad, work, pivot_tol,
                                            tol_force)
     if status != 2:
@@ -131,13 +144,14 @@ def newton_iteration(q, lam, P, elements, dofs, dof_map, band, heights, grad, gr
 
 
 @njit(cache=True)
-def mgdc_iteration(q, lam, P, uP1, elements, dofs, dof_map, band, heights, grad, grad_full,
-                   work, pivot_tol, tol_force):
+def mgdc_iteration(q, lam, P, uP1, elements, dofs, loads, dof_map, band, heights, grad,
+                   grad_full, work, pivot_tol, tol_force):
     """One MGDC corrector iteration: the load increment keeps the correction orthogonal to
     the step's first tangent ``uP1``. ``work`` is (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, dlam, energy)."""
-    energy = assemble_system(q, elements, dofs, band, grad, grad_full)
+    energy = with_dead_loads(q, loads, grad, grad_full,
+                             assemble_system(q, elements, dofs, band, grad, grad_full))
     status, neg, r_max, dl = mgdc_correction(lam, P, uP1, band, heights, grad, work,
                                              pivot_tol, tol_force)
     if status != 2:
@@ -147,12 +161,15 @@ def mgdc_iteration(q, lam, P, uP1, elements, dofs, dof_map, band, heights, grad,
 
 
 @njit(cache=True)
-def _assemble3d(q, model, dof_scale, band, heights, grad, grad_full):
+def assemble3d(q, model, loads, dof_scale, band, heights, grad, grad_full):
+    """Energy (J) of 3-D rods (``model``: the tuple of `RodSystem3D.model_arrays`) and their
+    dead loads; writes the band, the reduced and the full gradient."""
     (n_nodes, edge_nodes, src_t, src_d, stretch_params, pair_edges, pair_signs, pair_params,
      sf, sr, pf, pr, vals, jacs, hesss) = model
-    return assemble_system3d_ws(q, n_nodes, edge_nodes, src_t, src_d, stretch_params,
-                                pair_edges, pair_signs, pair_params, sf, sr, pf, pr, dof_scale,
-                                band, grad, grad_full, vals, jacs, hesss, heights)
+    energy = assemble_system3d_ws(q, n_nodes, edge_nodes, src_t, src_d, stretch_params,
+                                  pair_edges, pair_signs, pair_params, sf, sr, pf, pr,
+                                  dof_scale, band, grad, grad_full, vals, jacs, hesss, heights)
+    return with_dead_loads(q, loads, grad, grad_full, energy)
 
 
 @njit(cache=True)
@@ -162,13 +179,13 @@ def _apply_scaled(q, dof_map, dof_scale, du):
 
 
 @njit(cache=True)
-def newton_iteration3d(q, lam, P, model, dof_map, dof_scale, band, heights, grad, grad_full,
-                       work, pivot_tol, tol_force):
+def newton_iteration3d(q, lam, P, model, loads, dof_map, dof_scale, band, heights, grad,
+                       grad_full, work, pivot_tol, tol_force):
     """One Newton iteration at fixed load lam P (N) of 3-D rods. ``model``: the tuple of
     `RodSystem3D.model_arrays`; ``work`` (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, energy)."""
-    energy = _assemble3d(q, model, dof_scale, band, heights, grad, grad_full)
+    energy = assemble3d(q, model, loads, dof_scale, band, heights, grad, grad_full)
     status, neg, r_max = newton_correction(lam, P, band, heights, grad, work, pivot_tol,
                                            tol_force)
     if status != 2:
@@ -178,13 +195,13 @@ def newton_iteration3d(q, lam, P, model, dof_map, dof_scale, band, heights, grad
 
 
 @njit(cache=True)
-def mgdc_iteration3d(q, lam, P, uP1, model, dof_map, dof_scale, band, heights, grad,
+def mgdc_iteration3d(q, lam, P, uP1, model, loads, dof_map, dof_scale, band, heights, grad,
                      grad_full, work, pivot_tol, tol_force):
     """One MGDC corrector iteration of 3-D rods (see `mgdc_correction`).
     ``work`` (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, dlam, energy)."""
-    energy = _assemble3d(q, model, dof_scale, band, heights, grad, grad_full)
+    energy = assemble3d(q, model, loads, dof_scale, band, heights, grad, grad_full)
     status, neg, r_max, dl = mgdc_correction(lam, P, uP1, band, heights, grad, work,
                                              pivot_tol, tol_force)
     if status != 2:

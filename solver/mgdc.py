@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 from snapmorph.solver.branching import BranchMonitor, PathState
-from snapmorph.solver.newton import TOL_DISP, counted, settled
+from snapmorph.solver.newton import TOL_DISP, counted, newton, settled
 from snapmorph.solver.path import Recorder
 from snapmorph.solver.problem import check_options, driver_system, load_unit, load_vector
 from snapmorph.solver.stability import held_count
@@ -77,15 +77,15 @@ class _Mgdc:
         self.system, self.fu = system, fu
         length, fscale = structure.scales()
         self.fscale = fscale = fscale / fu  # forces below are in the system's units (N / fu)
-        self.tol_disp = TOL_DISP * length
+        self.length, self.tol_disp = length, TOL_DISP * length
         # the load factor lam is the force in units of `unit` N (see `load_unit`)
         self.unit = load_unit(fscale)
+        self.unit_N = self.unit * fu  # N per unit of lam (what the control's targets need)
         self.P = load_vector(system, control) * self.unit
-        r_node = np.array([system.dof_map[dof] for dof in control.dofs])
-        self._n_free = np.where(r_node >= 0, control.direction, 0.0)
-        self._r_idx = np.where(r_node >= 0, r_node, 0)
-        self.q = structure.initial_state()
+        self._n_free, self._r_idx = control.reduced_weights(system)
+        self.q = control.first_state(structure)
         self.lam = 0.0
+        self.d = control.d_start
         self.rec = Recorder(structure, fu, system)
         system.evaluate(self.q)
         if not system.factor():
@@ -95,11 +95,11 @@ class _Mgdc:
             )
         self.uP = system.solve(self.P)
         neg0 = system.negative_eigenvalues
-        self.rec.add(0.0, 0.0, self.q, system.energy, 0, neg0, neg0)
-        dd0 = control.distance / o["steps"]
+        self.rec.add(self.d, 0.0, self.q, system.energy, 0, neg0, neg0)
         flex = self.node_component(self.uP)
         if not flex > 0:
             raise ValueError("the pushed node does not move along the direction under load")
+        dd0 = control.span(flex, self.unit_N) / o["steps"]
         # the first step moves the node by a quarter of distance / steps (the path may bend
         # sharply at once); steps then grow up to four times that, i.e. about distance / steps
         self.s0 = s0 = 0.25 * dd0 * np.linalg.norm(self.uP) / flex
@@ -110,17 +110,18 @@ class _Mgdc:
                                          max_switches=o["max_switches"], load_unit=self.unit,
                                          rig_step=o["switch_size"] * 0.25 * dd0,
                                          driver_max_iter=self.max_iter, force_unit=fu)
-            self.monitor.start(PathState(self.q.copy(), 0.0, 0.0, neg0, neg0, 1.0, 1.0,
+            self.monitor.start(PathState(self.q.copy(), 0.0, self.d, neg0, neg0, 1.0, 1.0,
                                          system.energy))
         self.s = s0
-        self.s_max = 8.0 * s0 if o["max_step"] is None else o["max_step"]
+        self.s_max = self.s_max0 = 8.0 * s0 if o["max_step"] is None else o["max_step"]
         self.sign = 1.0
         self.step_prev = None
         self.status = "ok"
-        self.d = 0.0
+        self.landed = None  # a control that ends on a load factor: was it landed on exactly?
         self.rejected = 0
         self.total_iterations = 0
         self.travelled = 0.0  # sum of |dd| along the path, m (wandering guard)
+        self.arc = 0.0  # the path's length so far in the step norm (reduced DOFs), m
 
     def node_component(self, u):
         """The pushed node's component along the direction of a reduced vector ``u``."""
@@ -128,7 +129,7 @@ class _Mgdc:
 
     def run(self):
         """Step until the target displacement (or a stop); returns the `Path`."""
-        while self.d < self.control.distance:
+        while not self.control.reached(self.d, self.lam, self.unit_N):
             if len(self.rec.rows["d"]) > self.o["max_steps"]:
                 self.status = f"stopped: more than {self.o['max_steps']} steps"
                 break
@@ -150,6 +151,8 @@ class _Mgdc:
             "rejected_steps": self.rejected,
             "total_iterations": self.total_iterations,
         }
+        if self.landed is not None:
+            info["landed"] = self.landed
         monitor = self.monitor
         return self.rec.path(self.status, "mgdc", path_info(info, monitor),
                              monitor.points if monitor is not None else ())
@@ -271,6 +274,9 @@ class _Mgdc:
         """Take the converged trial state; record it (or the monitor's reroute) and adapt
         the step. False when the path ends here (the status says why, or ``stop``)."""
         system, rec, monitor, unit = self.system, self.rec, self.monitor, self.unit
+        target = self.control.landing(self.lam, lam_try, self.unit_N)
+        if target is not None:
+            q_try, lam_try, it, uP_try = self._land(target, q_try, lam_try, it, uP_try)
         # accepted: the system holds K at q_try
         self.step_prev = system.reduced(q_try) - system.reduced(self.q)
         self.q, self.lam = q_try, lam_try
@@ -302,10 +308,13 @@ class _Mgdc:
                 energy, iterations = s_new.energy, 0
         rec.add(self.d, self.lam * unit, self.q, energy, iterations, neg, negd)
         self.travelled += abs(self.d - rec.rows["d"][-2])
-        distance = self.control.distance
+        distance = self.control.travel
         if self.travelled > WANDER * distance:
             self.status = _wandering(rec, self.travelled, distance)
             return False
+        self.arc += float(np.linalg.norm(self.step_prev))
+        if self.o["max_step"] is None:  # the control may let the steps grow with the path
+            self.s_max = self.control.max_step(self.s_max0, self.arc)
         target = self.o["target_iterations"]
         if it <= target - 1:
             self.s = min(1.5 * self.s, self.s_max)
@@ -313,10 +322,28 @@ class _Mgdc:
             self.s *= 0.6
         if self.stop is not None and self.stop(rec.rows):
             return False
-        if abs(self.d) > 10 * distance:
+        if abs(self.d - self.control.d_start) > 10 * distance:
             self.status = "stopped: the pushed node moved away from the target distance"
             return False
         return True
+
+    def _land(self, target, q_try, lam_try, it, uP_try):
+        """The step from the last state to (q_try, lam_try) passed the control's target load
+        factor: Newton at exactly ``target`` from the state interpolated between the two
+        (a regular point of a converged step). Returns the state to accept (the landed one,
+        or the trial itself when Newton fails there: ``landed`` False); the system holds K
+        at it."""
+        t = (target - self.lam) / (lam_try - self.lam)
+        q = self.q + t * (q_try - self.q)
+        tol_force = self.tol * max(self.fscale, abs(target) * self.unit)
+        got = newton(self.system, q, target, self.P, tol_force, self.tol_disp, self.max_iter,
+                     0.25 * self.length)
+        self.landed = got >= 0
+        if got >= 0:
+            return q, target, got, None
+        self.system.evaluate(q_try)
+        self.system.factor()
+        return q_try, lam_try, it, uP_try
 
     def _observe(self, new):
         """Show the new state to the monitor. Returns its `Reroute`, None (go on), or False

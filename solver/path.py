@@ -24,7 +24,11 @@ class Path:
     negative_eigenvalues_displacement: (K,) the same with the pushed displacement held;
     critical_points: `solver.stability.CriticalPoint` records (limit points and
     bifurcations met, in path order; empty when the push ran with ``critical=False``);
-    fields: the structure's other per-state arrays, name -> (K, ...) (3-D rods: "twist").
+    fields: the structure's other per-state arrays, name -> (K, ...) (3-D rods: "twist");
+    load_factor: (K,) the factor on every dead load (`solver.loading.follow_load` paths;
+    None for a push, whose dead loads act at full value throughout);
+    limit_load_factor: the load factor at the first limit point of the load factor (the
+    dead load at which the structure snaps), None when the path passed none.
     """
 
     displacement: np.ndarray
@@ -39,6 +43,8 @@ class Path:
     info: dict = field(default_factory=dict)
     critical_points: list = field(default_factory=list)
     fields: dict = field(default_factory=dict)
+    load_factor: np.ndarray | None = None
+    limit_load_factor: float | None = None
 
     @property
     def twist(self) -> np.ndarray:

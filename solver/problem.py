@@ -106,7 +106,13 @@ class Control:
 
     ``dofs`` (dim,): the node's position components in the state vector; ``member_dofs``
     (members, dim): those of every node sharing its displacement; ``origin`` (dim,) m: the
-    node's stress-free position."""
+    node's stress-free position (the displacement is measured from it); ``start``: the full
+    state the push starts from (None: the stress-free one), an equilibrium under the
+    structure's dead loads, at displacement ``d_start`` (m).
+
+    The drivers use a control only through its methods (a `LoadControl` follows dead loads
+    instead of a pushed node); each takes the N per unit of the driver's load factor
+    (``unit_N``) where the answer depends on it."""
 
     node: int
     members: np.ndarray
@@ -117,6 +123,8 @@ class Control:
     dofs: np.ndarray = None
     member_dofs: np.ndarray = None
     origin: np.ndarray = None
+    start: np.ndarray | None = None
+    d_start: float = 0.0
 
     def displacement(self, q) -> float:
         """The pushed node's displacement (m) along the direction at the state ``q``."""
@@ -127,9 +135,63 @@ class Control:
         nodes sharing its displacement) at the state last evaluated by ``system``."""
         return float(self.direction @ system.grad_full[self.member_dofs].sum(axis=0))
 
+    def unit_load(self, system) -> np.ndarray:
+        """Reduced load vector of a unit force (N) on the pushed node along the direction."""
+        P = np.zeros(system.n)
+        for c, dof in enumerate(self.dofs):
+            r = system.dof_map[dof]
+            if r >= 0:
+                P[r] = self.direction[c]
+        return P
 
-def make_control(structure, node, direction, distance, method) -> Control:
-    """Validate a push request and describe it."""
+    def reduced_weights(self, system):
+        """(weights, indices): the push's displacement component of a reduced vector u is
+        ``weights @ u[indices]`` (the pushed node's free components along the direction)."""
+        r_node = np.array([system.dof_map[dof] for dof in self.dofs])
+        return (np.where(r_node >= 0, self.direction, 0.0),
+                np.where(r_node >= 0, r_node, 0))
+
+    @property
+    def rig_axis(self) -> int | None:
+        """The state component a displacement-controlled rig holds (an axis-aligned push),
+        else None."""
+        n = self.direction
+        axes = [k for k in range(len(n)) if abs(abs(n[k]) - 1.0) < 1e-12]
+        return axes[0] if axes else None
+
+    @property
+    def travel(self) -> float:
+        """The push's travel (m) from its start to its distance: the scale of the drivers'
+        guards (a path that wanders, a node that runs away)."""
+        return self.distance - self.d_start
+
+    def span(self, flexibility=None, unit_N=None) -> float:
+        """The length (m) the driver's first steps are a fraction of: the push's travel."""
+        return self.travel
+
+    def reached(self, d, lam, unit_N) -> bool:
+        """Is the path's target reached at displacement ``d`` (m)?"""
+        return not d < self.distance
+
+    def max_step(self, s_max, arc) -> float:
+        """The cap of the driver's step norm after a path of length ``arc`` (its norm, m):
+        a push keeps the driver's own (``s_max``, from its distance)."""
+        return s_max
+
+    def landing(self, lam_prev, lam_new, unit_N):
+        """The load factor to land the last step on exactly, or None (a push lands
+        nowhere: it ends at the first state past its distance)."""
+        return None
+
+    def first_state(self, structure) -> np.ndarray:
+        """The full state the path starts from (a fresh copy)."""
+        return structure.initial_state() if self.start is None else self.start.copy()
+
+
+def make_control(structure, node, direction, distance, method, start=None) -> Control:
+    """Validate a push request and describe it. ``start``: the full state the push starts
+    from (an equilibrium; None: the stress-free state); ``distance`` counts from the
+    stress-free state and must lie beyond the start's displacement."""
     require_problem(structure)
     node = structure.check_node(node)
     dim, names = int(structure.dim), structure.component_names
@@ -145,7 +207,14 @@ def make_control(structure, node, direction, distance, method) -> Control:
         raise ValueError("distance (m) is required")
     distance = real_scalar(distance, "distance", "m")
     length = structure.scales()[0]
-    if not np.isfinite(distance) or distance <= 0.0 or distance > MAX_DISTANCE * length:
+    dofs = np.asarray(structure.node_dofs(node), dtype=np.int64)
+    origin = structure.initial_state()[dofs]
+    d_start = 0.0 if start is None else float(n @ (start[dofs] - origin))
+    if start is not None and np.isfinite(distance) and not distance > d_start:
+        raise ValueError(f"distance ({distance!r} m from the stress-free state) must lie "
+                         f"beyond the start's displacement {d_start:.6g} m along the push")
+    low = 0.0 if start is None else -MAX_DISTANCE * length  # from a start: beyond it
+    if not np.isfinite(distance) or distance <= low or distance > MAX_DISTANCE * length:
         raise ValueError(
             f"distance must be finite, > 0 m and at most {MAX_DISTANCE:g} x the structure's "
             f"size ({MAX_DISTANCE * length:.6g} m); got {distance!r}")
@@ -172,10 +241,11 @@ def make_control(structure, node, direction, distance, method) -> Control:
             )
         axis = axis_aligned[0]
         n = np.round(n)
-    dofs = np.asarray(structure.node_dofs(node), dtype=np.int64)
     member_dofs = np.array([structure.node_dofs(m) for m in members], dtype=np.int64)
-    origin = structure.initial_state()[dofs]
-    return Control(node, members, n, distance, method, axis, dofs, member_dofs, origin)
+    if start is not None:
+        d_start = float(n @ (start[dofs] - origin))  # n rounded for displacement control
+    return Control(node, members, n, distance, method, axis, dofs, member_dofs, origin,
+                   start, d_start)
 
 
 def real_array(value, name):
@@ -257,13 +327,9 @@ def driver_system(structure, extra_fixed=None):
 
 
 def load_vector(system, control):
-    """Reduced load vector of a unit force (N) on the pushed node along the direction."""
-    P = np.zeros(system.n)
-    for c, dof in enumerate(control.dofs):
-        r = system.dof_map[dof]
-        if r >= 0:
-            P[r] = control.direction[c]
-    return P
+    """Reduced load vector of a unit load of ``control`` (a unit force, N, on the pushed
+    node along the direction; a `LoadControl`'s dead loads scaled to 1 N in all)."""
+    return control.unit_load(system)
 
 
 def load_unit(fscale):

@@ -237,6 +237,22 @@ class Structure(ConstrainedStructure):
     def _max_bending_stiffness(self) -> float:
         return max(float(np.max(r.EI)) for r in self.rods)  # N m^2
 
+    def _edge_areas(self, k) -> np.ndarray:
+        """(n_edges,) section area of each edge of rod ``k``, m^2: the mean of its two
+        halves' w t (the section may change at an edge's midpoint)."""
+        rod = self.rods[k]
+        return 0.5 * np.sum(rod.width * rod.thickness, axis=1)
+
+    def _complete_state(self, q, path, index):
+        """A sliding clamp's ghost translates with its node (a held one stays put)."""
+        X = self.reference_positions
+        G = self._ghost_positions(X)
+        pos = np.asarray(path.positions[index], dtype=float)
+        for k, c in enumerate(self._clamps):
+            if not c["hold_position"]:
+                q[2 * (self.n_nodes + k): 2 * (self.n_nodes + k) + 2] = (
+                    G[k] + pos[c["node"]] - X[c["node"]])
+
     def with_reference_positions(self, positions) -> "Structure":
         """A copy with the same rods, sections and constraints on new stress-free node
         positions (n_nodes, 2) m (used by `solver.stability.seed_imperfection`)."""
@@ -267,7 +283,13 @@ class Structure(ConstrainedStructure):
             if c["group"] not in done:
                 done.add(c["group"])
                 new.clamp(c["node"], toward=c["toward"], hold_position=c["hold_position"])
+        self._copy_loads_to(new)
         return new
+
+    def add_gravity(self, density, g=9.81, direction=(0.0, -1.0), rods=None):
+        """Self-weight along ``direction`` (default -z); see
+        `solver.constraints.ConstrainedStructure.add_gravity`."""
+        super().add_gravity(density, g, direction, rods)
 
     def fix(self, node, components="xz"):
         """Hold the displacement of ``node`` at zero in "x", "z" or "xz".
@@ -445,14 +467,17 @@ class Structure(ConstrainedStructure):
             np.ascontiguousarray(springs_p),
         )
 
-    def reduced_system(self, extra_fixed=None, normalized=False) -> ReducedSystem:
+    def reduced_system(self, extra_fixed=None, normalized=False,
+                       dead_loads=True) -> ReducedSystem:
         """Assemble the DOF map (ordered by reverse Cuthill–McKee) and band storage.
 
         ``extra_fixed``: iterable of (node, component) pairs held or prescribed in addition
         to the supports (the displacement-controlled DOF). ``normalized``: the structure
         made of the reference material (`E_REF`); the system's ``force_unit`` = E_max / E_REF
         turns its forces, energies and stiffnesses into N, J and N/m. The path followers use
-        it: paths then do not depend on E at all, bit for bit.
+        it: paths then do not depend on E at all, bit for bit (dead loads aside: they are
+        divided by the force unit, so a heavy structure's path depends on E as it should).
+        ``dead_loads``: assemble the structure's dead loads at full value (docs/loads.md).
         """
         if self.n_nodes == 0:
             raise ValueError("the structure has no rods")
@@ -496,24 +521,35 @@ class Structure(ConstrainedStructure):
         node_map = dof_map.reshape(-1, 2)
         bw = bandwidth(*(node_map[conn].reshape(conn.shape[0], 2 * conn.shape[1])
                          for conn in (elements[0], elements[2], elements[4])))
-        system = ReducedSystem(self.elements(normalized), dof_map, k, bw)
-        system.force_unit = self.E_max / E_REF if normalized else 1.0
+        force_unit = self.E_max / E_REF if normalized else 1.0
+        loads = self._system_loads(force_unit) if dead_loads else None
+        system = ReducedSystem(self.elements(normalized), dof_map, k, bw, loads=loads)
+        system.force_unit = force_unit
         return system
 
     # ------------------------------------------------------------------ energy access
     def energy(self, positions=None) -> float:
-        """Total elastic energy (J) at ``positions`` (n_nodes, 2) m (default: reference)."""
+        """Total potential energy (J) at ``positions`` (n_nodes, 2) m or a full state
+        (default: reference): the elastic energy, plus the dead loads' potential
+        -sum f (x - X) when the structure has any."""
         q = self._flat(positions)
-        return float(total_energy(q, self.elements()))
+        energy = float(total_energy(q, self.elements()))
+        loads = self._system_loads()
+        if loads is not None:
+            full, f, ref = loads
+            energy += float(-f @ (q[full] - ref))
+        return energy
 
     def gradient(self, positions=None) -> np.ndarray:
-        """Internal force dE/dx (n_nodes, 2), N."""
+        """dE/dx (n_nodes, 2), N, of the potential energy of `energy`: the internal force,
+        minus the dead loads."""
         sysm = self._unconstrained()
         sysm.evaluate(self._flat(positions))
         return sysm.grad_full[: 2 * self.n_nodes].reshape(-1, 2).copy()
 
     def hessian(self, positions=None) -> np.ndarray:
-        """Dense tangent stiffness d2E/dx2 (2 n_nodes, 2 n_nodes), N/m, without constraints."""
+        """Dense tangent stiffness d2E/dx2 (2 n_nodes, 2 n_nodes), N/m, without constraints
+        (dead loads add none)."""
         sysm = self._unconstrained()
         dense = sysm.dense_stiffness(self._flat(positions))
         # reduced DOFs are numbered by reverse Cuthill-McKee: map back to natural order
@@ -546,6 +582,13 @@ class Structure(ConstrainedStructure):
         is prescribed step by step. Every other constraint on the node is kept.
         Returns a `solver.path.Path`. Options: see the drivers `solver.mgdc.follow_mgdc`
         and `solver.displacement.follow_displacement`.
+
+        Dead loads (`add_load`, `add_gravity`) act at full value from the start: the push
+        starts from their equilibrium (`follow_load` to factor 1, ConvergenceError when the
+        structure does not carry them) and ``path.force`` is the push's extra force. The
+        displacement (and ``distance``) count from the stress-free shape: the path starts
+        at the sag of the node. ``start=`` (positions or a full state, e.g.
+        ``path_state(path, k)``): push from that equilibrium instead (polished by Newton).
         """
         return self._push(node, direction, distance, method, options)
 

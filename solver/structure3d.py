@@ -296,6 +296,11 @@ class Structure3D(ConstrainedStructure):
         rod = self.rods[r]
         return rod, int(node - rod.nodes[0])
 
+    def add_gravity(self, density, g=9.81, direction=(0.0, 0.0, -1.0), rods=None):
+        """Self-weight along ``direction`` (default -z); see
+        `solver.constraints.ConstrainedStructure.add_gravity`."""
+        super().add_gravity(density, g, direction, rods)
+
     def fix(self, node, components="xyz"):
         """Hold the displacement of ``node`` at zero in any subset of "x", "y", "z"."""
         self._fix(node, components)
@@ -406,6 +411,14 @@ class Structure3D(ConstrainedStructure):
         """EI1_max (N m^2): bending through the thickness, the easy way."""
         return max(float(np.max(r.EI1)) for r in self.rods)
 
+    def _edge_areas(self, k) -> np.ndarray:
+        """(n_edges,) section area w t of each edge of rod ``k``, m^2."""
+        return self.rods[k].width * self.rods[k].thickness
+
+    def _complete_state(self, q, path, index):
+        """The twists of a path row (recorded in the canonical convention)."""
+        q[3 * self.n_nodes:] = np.asarray(path.fields["twist"][index], dtype=float)
+
     def model(self):
         """The model arrays of `solver.assembly3d` (cached until the structure changes)."""
         if self._cache is None:
@@ -442,7 +455,8 @@ class Structure3D(ConstrainedStructure):
             }
         return self._cache
 
-    def reduced_system(self, extra_fixed=None, normalized=False) -> RodSystem3D:
+    def reduced_system(self, extra_fixed=None, normalized=False,
+                       dead_loads=True) -> RodSystem3D:
         """A fresh system (reference frames at the stress-free state) with the DOFs ordered
         by reverse Cuthill–McKee over node groups and edge twists, so that positions and
         twists interleave along each rod, started where the envelope the factorisation
@@ -450,7 +464,8 @@ class Structure3D(ConstrainedStructure):
 
         ``extra_fixed``: iterable of (node, component 0..2) held in addition to supports.
         ``normalized``: 3-D rods have no per-unit-modulus elements: the system is in
-        physical units whatever it says (``force_unit`` 1)."""
+        physical units whatever it says (``force_unit`` 1). ``dead_loads``: assemble the
+        structure's dead loads at full value (docs/loads.md)."""
         model = self.model()
         n, ne = self.n_nodes, self.n_edges
         rep, fixed = self._held(extra_fixed)
@@ -501,7 +516,8 @@ class Structure3D(ConstrainedStructure):
                          for full in (sf, pf)))
         twist_length = np.concatenate(
             [np.maximum(r.width, r.thickness) for r in self.rods])
-        return RodSystem3D(model, dof_map, k, bw, twist_length=twist_length)
+        return RodSystem3D(model, dof_map, k, bw, twist_length=twist_length,
+                           loads=self._system_loads() if dead_loads else None)
 
     # ------------------------------------------------------------------ energy access
     def state(self, positions=None, twist=None) -> np.ndarray:
@@ -525,10 +541,12 @@ class Structure3D(ConstrainedStructure):
         """A system with every DOF free and in natural order (for energy checks)."""
         model = self.model()
         n_full = 3 * self.n_nodes + self.n_edges
-        return RodSystem3D(model, np.arange(n_full), n_full, n_full - 1)
+        return RodSystem3D(model, np.arange(n_full), n_full, n_full - 1,
+                           loads=self._system_loads())
 
     def energy(self, q=None) -> float:
-        """Total elastic energy (J) of the full state ``q`` (default: stress free)."""
+        """Total potential energy (J) of the full state ``q`` (default: stress free): the
+        elastic energy, plus the dead loads' potential -sum f (x - X) when there are any."""
         sysm = self.unconstrained_system()
         return float(sysm.evaluate(self.initial_state() if q is None else np.asarray(q, float)))
 
@@ -538,7 +556,9 @@ class Structure3D(ConstrainedStructure):
         ``distance`` (m), with the planar solver's path followers (`Structure.push`).
 
         Returns a `solver.path.Path`: displacement (K,), force (K,), positions
-        (K, n_nodes, 3), twist (K, n_edges), status, stability counts, critical points."""
+        (K, n_nodes, 3), twist (K, n_edges), status, stability counts, critical points.
+        Dead loads act at full value from the start, and ``start=`` pushes from a given
+        equilibrium, as for `Structure.push`."""
         return self._push(node, direction, distance, method, options)
 
     def solve_equilibrium(self, positions=None, node=None, direction=(0.0, 0.0, -1.0),

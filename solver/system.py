@@ -5,7 +5,9 @@ reduced gradient and tangent stiffness in band storage, the banded LDL^T factori
 its inertia count (and a dense pivoting fallback), solves and increments. `ReducedSystem`
 (planar rods) and `RodSystem3D` (3-D rods with twist, carrying reference frames from state
 to state) add the assembly and the fused compiled iterations of their model (`solver.iteration`).
-They own no physics of their own.
+They own no physics of their own. A system may carry dead loads (``loads``: full DOFs,
+forces N, stress-free coordinates m): their potential -f (x - X) is part of its energy and
+gradient wherever they are assembled, so every driver sees them (docs/loads.md).
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from snapmorph.solver.assembly import assemble_system, element_dofs
+from snapmorph.solver.assembly import (assemble_dead_loads, assemble_system, element_dofs,
+                                      load_record, no_loads)
 from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws, element_dofs3d
 from snapmorph.solver.banded import (band_to_dense, envelope_heights, ldlt_factor_envelope,
                                      ldlt_solve_envelope)
@@ -32,10 +35,16 @@ class BandedSystem:
     ``dof_map`` (n_full,) int: full -> reduced DOF (-1 held); ``element_dofs``: the reduced
     DOFs of every element's local coordinates (arrays (n_elements, k), -1 held), which fix
     the factor's envelope; ``dof_scale`` (n_full,): dq_full = dof_scale * du_reduced (None:
-    all 1, reduced DOFs are the full ones); ``order``: the band's memory order."""
+    all 1, reduced DOFs are the full ones); ``order``: the band's memory order; ``loads``:
+    dead loads (full position DOFs (m,), forces (m,) N, stress-free coordinates (m,) m) or
+    None."""
 
-    def __init__(self, dof_map, n_reduced, bandwidth, element_dofs, dof_scale=None, order="C"):
+    def __init__(self, dof_map, n_reduced, bandwidth, element_dofs, dof_scale=None, order="C",
+                 loads=None):
         self.dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
+        # the dead-load record of `solver.assembly.assemble_dead_loads` (empty: none)
+        self.loads = no_loads() if loads is None else load_record(*loads, self.dof_map)
+        self._loaded = self.loads[0].shape[0] > 0
         # (no scaling: reduced DOFs are full ones, and the per-step conversions skip it)
         self._scaled = dof_scale is not None
         self.dof_scale = (np.asarray(dof_scale, dtype=float) if self._scaled
@@ -65,6 +74,12 @@ class BandedSystem:
     def evaluate(self, q):
         """Assemble energy (J), gradients (N) and K (N/m) at the full state ``q``."""
         raise NotImplementedError
+
+    def _with_loads(self, q, energy):
+        """``energy`` plus the dead loads' potential (their gradient added), when loaded."""
+        if not self._loaded:
+            return energy
+        return energy + assemble_dead_loads(q, self.loads, self.grad, self.grad_full)
 
     def factor(self):
         """Factorise the assembled K; records the number of negative eigenvalues.
@@ -176,23 +191,23 @@ class BandedSystem:
 
 class ReducedSystem(BandedSystem):
     """The system of planar rods: ``elements`` of `solver.assembly`, ``dof_map``
-    (2 n_nodes + 2 n_ghosts,) full -> reduced DOF."""
+    (2 n_nodes + 2 n_ghosts,) full -> reduced DOF, ``loads`` dead loads (`BandedSystem`)."""
 
-    def __init__(self, elements, dof_map, n_reduced, bandwidth):
+    def __init__(self, elements, dof_map, n_reduced, bandwidth, loads=None):
         dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
         self.elements = elements
         self.dofs = element_dofs(elements, dof_map)
-        super().__init__(dof_map, n_reduced, bandwidth, self.dofs)
+        super().__init__(dof_map, n_reduced, bandwidth, self.dofs, loads=loads)
         # the fused kernels, and their arguments after (q, lam, P[, uP1]) but the last
         self._newton_iteration, self._mgdc_iteration = newton_iteration, mgdc_iteration
-        self._kernel_args = (self.elements, self.dofs, self.dof_map, self.band, self.heights,
-                             self.grad, self.grad_full, self._work, PIVOT_TOL)
+        self._kernel_args = (self.elements, self.dofs, self.loads, self.dof_map, self.band,
+                             self.heights, self.grad, self.grad_full, self._work, PIVOT_TOL)
 
     def evaluate(self, q):
         """Assemble energy (J), gradients (N) and K (N/m) at positions ``q`` (m)."""
-        self.energy = assemble_system(
-            q, self.elements, self.dofs, self.band, self.grad, self.grad_full
-        )
+        energy = assemble_system(q, self.elements, self.dofs, self.band, self.grad,
+                                 self.grad_full)
+        self.energy = self._with_loads(q, energy)
         return self.energy
 
 
@@ -205,10 +220,10 @@ class RodSystem3D(BandedSystem):
     a reduced twist DOF is twist_length * theta, a length like the positions, so that the
     path followers' step norms and tolerances weigh rotations and displacements alike
     (default 1: reduced twists in rad). The reference frames are carried from accepted state
-    to accepted state by ``accept(q)``.
+    to accepted state by ``accept(q)``. ``loads``: dead loads (`BandedSystem`).
     """
 
-    def __init__(self, model, dof_map, n_reduced, bandwidth, twist_length=None):
+    def __init__(self, model, dof_map, n_reduced, bandwidth, twist_length=None, loads=None):
         self.n_nodes = int(model["n_nodes"])
         self.n_edges = int(model["stretch_params"].shape[0])
         self.edge_nodes = model["edge_nodes"]
@@ -226,7 +241,8 @@ class RodSystem3D(BandedSystem):
         if twist_length is not None:
             dof_scale[3 * self.n_nodes:] = 1.0 / np.asarray(twist_length, dtype=float)
         sf, sr, pf, pr = self.element_dofs
-        super().__init__(dof_map, n_reduced, bandwidth, (sr, pr), dof_scale, order="F")
+        super().__init__(dof_map, n_reduced, bandwidth, (sr, pr), dof_scale, order="F",
+                         loads=loads)
         # the arrays the compiled kernels read (src_t, src_d are updated in place by accept)
         # and the frames' jets, written at every assembly
         n_frames = self.edge_nodes.shape[0]
@@ -237,16 +253,19 @@ class RodSystem3D(BandedSystem):
         self._reference_twist = None
         # the fused kernels, and their arguments after (q, lam, P[, uP1]) but the last
         self._newton_iteration, self._mgdc_iteration = newton_iteration3d, mgdc_iteration3d
-        self._kernel_args = (self.model_arrays, self.dof_map, self.dof_scale, self.band,
-                             self.heights, self.grad, self.grad_full, self._work, PIVOT_TOL)
+        self._kernel_args = (self.model_arrays, self.loads, self.dof_map, self.dof_scale,
+                             self.band, self.heights, self.grad, self.grad_full, self._work,
+                             PIVOT_TOL)
 
     def evaluate(self, q):
         """Assemble energy (J), gradients (N, N m) and K at the state ``q``."""
         m = self.model_arrays
-        self.energy = assemble_system3d_ws(
-            np.ascontiguousarray(q, dtype=float), m[0], m[1], m[2], m[3], m[4], m[5], m[6],
-            m[7], m[8], m[9], m[10], m[11], self.dof_scale, self.band, self.grad,
-            self.grad_full, m[12], m[13], m[14], self.heights)
+        q = np.ascontiguousarray(q, dtype=float)
+        energy = assemble_system3d_ws(
+            q, m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8], m[9], m[10], m[11],
+            self.dof_scale, self.band, self.grad, self.grad_full, m[12], m[13], m[14],
+            self.heights)
+        self.energy = self._with_loads(q, energy)
         return self.energy
 
     def _unit_tangents(self, q):
