@@ -140,9 +140,11 @@ def _design_title(design) -> str:
         text += f" ({design.placement_mode} placement)"
     v = getattr(design, "verification", None)
     if v is not None:
-        text += f"\nsimulated array: {100 * v['max_deviation']:.2f} %"
+        status = "" if v["status"] == "ok" else f" ({v['status'].split(':')[0]})"
+        text += f"\nsimulated array{status}: {100 * v['max_deviation']:.2f} %"
     if getattr(design, "met", None) is False:
-        text += f"   TOLERANCE {100 * design.tol:.2f} % MISSED"
+        text += (f"   TOLERANCE {100 * design.tol:.2f} % MISSED"
+                 if design.max_deviation > design.tol else "   VERIFICATION FAILED")
     return text
 
 
