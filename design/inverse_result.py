@@ -188,7 +188,8 @@ class Design:
         rows = [("predicted (map)", self.deviations)]
         if self.verification is not None:
             v = self.verification
-            rows.append((f"simulated array ({v['status']}, {v['time']:.1f} s)", v["deviations"]))
+            rows.append((f"simulated array ({v['status'].split(':')[0]}, {v['time']:.1f} s)",
+                         v["deviations"]))
         text.append("deviation from the target, % of its length (max / RMS, max in mm):")
         for name, devs in rows:
             for mode, what in (("best", "best rigid placement"),
