@@ -143,8 +143,17 @@ def add_target_options(p, units_option: str = "--units", what: str = "the target
     p.add_argument("--select", metavar="ID|LAYER", default=None, **kw,
                    help=f"the curve of {what} when the drawing holds several: an SVG element "
                         f"id, Inkscape layer or group, DXF layer or handle.{each}")
+    allowed = TARGET_UNITS + (("-",) if several else ())
+
+    def unit(text: str) -> str:
+        if text not in allowed:
+            raise argparse.ArgumentTypeError(
+                f"must be one of {', '.join(TARGET_UNITS)} (the target file's length unit"
+                + ("; '-': none for that target" if several else "") + f"); got {text!r}")
+        return text
+
     p.add_argument(units_option, dest="target_units", default=None, metavar="|".join(TARGET_UNITS),
-                   choices=TARGET_UNITS + (("-",) if several else ()), **kw,
+                   type=unit, **kw,
                    help=f"length unit of {what} when a CSV header or a DXF's $INSUNITS does "
                         f"not say (an SVG carries its own).{each}")
 

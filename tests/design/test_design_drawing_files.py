@@ -217,3 +217,37 @@ def test_tol_mm_missed_exits_1(tmp_path, capsys, synthetic_map_path):
     line = next(ln for ln in stdout.splitlines() if ln.startswith("TOLERANCE MISSED"))
     assert "= 0.01 mm" in line and "the absolute 0.01 mm governs, stricter than 1.00 %" in line
     assert "TOLERANCE MISSED" in (tmp_path / "o" / "units.csv").read_text()
+
+
+@pytest.mark.slow
+def test_fk_and_tolerance_read_the_drawing_itself(tmp_path, capsys):
+    """After designing curveA of an SVG with two curves, `fk --overlay`, `fk --nearest` and
+    `tolerance --target` take the same SVG with --select: the overlay lies on the designed
+    base (the largest distance within the design's 1 %), the nearest state is the designed
+    one; without --select they refuse in one line naming the option and the candidates."""
+    svg = CORPUS / "svg/two_candidates.inkscape.svg"
+    out = tmp_path / "A"
+    code, stdout, err = _run(capsys, "design", svg, *TW, "--select", "curveA", "--out", out,
+                             "--no-progress", "--no-verify", "--no-drawings")
+    assert code == 0, err
+    units = out / "units.csv"
+    code, stdout, err = _run(capsys, "fk", "--units", units, "--overlay", svg, "--select",
+                             "curveA", "--plot", tmp_path / "fk.png")
+    assert code == 0, err
+    line = next(ln for ln in stdout.splitlines() if ln.startswith("overlay"))
+    assert float(line.split("largest distance to the base ")[1].split(" mm")[0]) <= 1.97
+    code, stdout, err = _run(capsys, "fk", "--units", units, "--nearest", svg, "--select",
+                             "curveA")
+    every = "".join("0" if u.is_spacer else "1" for u in read_units_csv(units))
+    assert code == 0 and f"nearest state {every}" in stdout, err
+    code, stdout, err = _run(capsys, "tolerance", units, "--target", svg, "--select", "curveA",
+                             "--n", "100", "--plot", tmp_path / "tol.png")
+    assert code == 0 and (tmp_path / "tol.png").is_file(), err
+    for argv in (("fk", "--units", units, "--overlay", svg),
+                 ("tolerance", units, "--target", svg)):
+        code, _, err = _run(capsys, *argv)
+        assert code == 2 and len(err.strip().splitlines()) == 1
+        assert "--select" in err and "path#curveB" in err and "314.16 mm" in err
+    code, _, err = _run(capsys, "fk", "--units", units, "--overlay", svg, "--select", "curveA",
+                        "--target-units", "in")
+    assert code == 2 and "--target-units in" in err and "SVG" in err
