@@ -13,10 +13,16 @@ released state by default. Spacers change length only (sigma "L").
 The envelope: each unit's piece is resampled at ``stations`` points uniform in its own arc
 length; at each station the samples' points are expressed in the nominal curve's frame there
 (tangential and normal offsets) and the envelope is the range [min, max] of the normal offset
-over the samples whose units are all bistable: a band along the nominal curve. A curve lies
-inside it when the normal offset of each of its station points lies in that range
-(`envelope_contains`; the tangential range is kept in `lo`/`hi` too). Its coverage of fresh samples is measured on a second,
-independent Monte Carlo set (`held_out_coverage`).
+over the samples whose units are all bistable and the nominal itself (a sample without
+errors) (`lo`, `hi`), widened where needed to a half-width of at least ``floor``
+(`ENVELOPE_FLOOR_MM`, 0.05 mm): a band along the nominal curve (`band`). Near the clamp every sample starts at the same
+point, so without the floor the band is a few micrometres wide there and a curve that lies
+inside it as drawn, a whole-array simulation agreeing with the map to far better than the
+fabrication errors, would be counted outside. A curve lies inside when the normal offset of
+each of its station points lies in that range (`envelope_contains`, optionally widened by a
+`slack`: the accuracy of the model that computed the curve; the tangential range is kept in
+`lo`/`hi` too). Its coverage of fresh samples is measured on a second, independent Monte
+Carlo set (`held_out_coverage`).
 
 SI units (m, degrees for angles).
 """
@@ -34,6 +40,10 @@ from snapmorph.design.units import Unit
 SIGMA_DEFAULT = {"h": 0.5e-3, "L": 0.3e-3, "t": 0.02e-3}
 SIGMA_KEYS = ("L", "h", "t", "w")
 STATIONS = 33
+#: the envelope's half-width is at least this (mm): far below fabrication errors and what a
+#: plot of the band shows, far above the whole-array simulation's difference from the map
+#: next to the clamp (micrometres)
+ENVELOPE_FLOOR_MM = 0.05
 
 
 @dataclass
@@ -42,14 +52,14 @@ class ToleranceResult:
 
     nominal: (K, 2) all-snapped base of the nominal units (FK from the map);
     stations: (n_units, m, 2) the nominal's station points; frames: (n_units, m, 2, 2) unit
-    tangent and normal there; lo, hi: (n_units, m, 2) envelope bounds of the (tangential,
-    normal) offsets; samples: (n_ok, n_units, m, 2) every usable sample's station points;
+    tangent and normal there; lo, hi: (n_units, m, 2) the range of the (tangential, normal)
+    offsets over the samples and the nominal (`band()`: the normal band as tested and drawn); samples: (n_ok, n_units, m, 2) every usable sample's station points;
     free_end: (n_ok, 2) end points; end_angle_deg: (n_ok,) end-tangent directions;
     p_bistable: (n_units,) probability that each unit is bistable (released: still snapped
     without its actuator); n, n_ok: samples drawn and usable (every unit bistable, in the map);
     outside_map: samples with a unit outside the map's range; held_out_coverage: fraction of
     a second, independent set of n samples inside the envelope; time_s: wall time of the
-    Monte Carlo (s)."""
+    Monte Carlo (s); floor: the smallest half-width of the normal band (m)."""
 
     units: list
     sigma: dict
@@ -69,6 +79,7 @@ class ToleranceResult:
     outside_map: int
     held_out_coverage: float = math.nan
     time_s: float = math.nan
+    floor: float = ENVELOPE_FLOOR_MM * 1e-3
     extra: dict = field(default_factory=dict)
 
     # --------------------------------------------------------------------- queries
@@ -77,21 +88,36 @@ class ToleranceResult:
         d = np.asarray(pts, float) - self.stations
         return np.einsum("...uid,uikd->...uik", d, self.frames)
 
-    def envelope_contains(self, curve) -> bool:
+    def envelope_contains(self, curve, slack=0.0) -> bool:
         """Is the base ``curve`` ((K, 2) m, an all-snapped array from (0, 0) heading +x, unit
-        ends where forward kinematics puts them) inside the envelope at every station?"""
-        return bool(np.all(self.inside(curve)))
+        ends where forward kinematics puts them) inside the envelope at every station? `slack`
+        (m, a number or (n_units, m)): the band widened by that much on both sides."""
+        return bool(np.all(self.inside(curve, slack)))
 
-    def inside(self, curve) -> np.ndarray:
-        """(n_units, m) bool: which station points of ``curve`` are inside the envelope.
+    def inside(self, curve, slack=0.0) -> np.ndarray:
+        """(n_units, m) bool: which station points of ``curve`` are inside the envelope
+        (widened by `slack`, m, on both sides).
 
         The curve is cut into units by arc length in proportion to the nominal units' base
         lengths (hand-made units differ; at 0.3 mm in L the cut moves by far less than the
         envelope's width)."""
+        lo, hi = self.band()
+        off = self.normal_offsets(curve)
+        return (off >= lo - slack) & (off <= hi + slack)
+
+    def band(self) -> tuple:
+        """(lo, hi), each (n_units, m): the envelope's normal band (m), the samples' range
+        (`lo`, `hi`) widened about its middle to a half-width of at least `floor`."""
+        mid = (self.lo[..., 1] + self.hi[..., 1]) / 2
+        half = np.maximum((self.hi[..., 1] - self.lo[..., 1]) / 2, self.floor)
+        return mid - half, mid + half
+
+    def normal_offsets(self, curve) -> np.ndarray:
+        """(n_units, m) normal offsets (m) of a base curve's station points from the nominal
+        (cut into units as `inside` cuts it)."""
         pts = _stations_of_curve(np.asarray(curve, float), [u.L for u in self.units],
                                  self.stations.shape[1])
-        off = self.offsets(pts)[..., 1]
-        return (off >= self.lo[..., 1]) & (off <= self.hi[..., 1])
+        return self.offsets(pts)[..., 1]
 
     def free_end_summary(self) -> dict:
         """Scatter of the free end: standard deviations (mm, degrees) and the 95th percentile
@@ -109,8 +135,9 @@ class ToleranceResult:
 
     def envelope_polygon(self) -> np.ndarray:
         """(P, 2) closed outline of the envelope (m): the normal bounds along the stations."""
-        lo_pts = self.stations + self.lo[..., 1:2] * self.frames[..., 1, :]
-        hi_pts = self.stations + self.hi[..., 1:2] * self.frames[..., 1, :]
+        lo, hi = self.band()
+        lo_pts = self.stations + lo[..., None] * self.frames[..., 1, :]
+        hi_pts = self.stations + hi[..., None] * self.frames[..., 1, :]
         lo_pts = lo_pts.reshape(-1, 2)
         hi_pts = hi_pts.reshape(-1, 2)
         return np.vstack([lo_pts, hi_pts[::-1], lo_pts[:1]])
@@ -118,6 +145,7 @@ class ToleranceResult:
     def summary(self) -> str:
         """A few lines for the command line."""
         f = self.free_end_summary()
+        lo, hi = self.band()
         lines = [f"{self.n} samples ({self.n_ok} usable, {self.outside_map} outside the map), "
                  f"{self.state} state, sigma " + ", ".join(f"{k} {v * 1e3:g} mm"
                                                           for k, v in self.sigma.items()),
@@ -126,7 +154,8 @@ class ToleranceResult:
                  f"end angle std {f['std_angle_deg']:.3g} deg",
                  "P(bistable) per unit: " + ", ".join(
                      f"{i + 1}: {p:.3f}" for i, p in enumerate(self.p_bistable)),
-                 f"largest envelope half-width: {np.max(self.hi[..., 1] - self.lo[..., 1]) * 500:.3g} mm"]
+                 f"envelope half-width: largest {np.max(hi - lo) * 500:.3g} mm, smallest "
+                 f"{np.min(hi - lo) * 500:.3g} mm (its floor)"]
         if math.isfinite(self.held_out_coverage):
             lines.append(f"held-out coverage: {self.held_out_coverage * 100:.1f} % of "
                          f"{self.n} independent samples inside the envelope")
@@ -286,7 +315,8 @@ def _stations_of_curve(curve, lengths, m):
 
 def tolerance(units, sigma=None, n: int = 1000, seed: int = 0, design_map=None,
               state: str = "released", stations: int = STATIONS,
-              held_out: bool = True) -> ToleranceResult:
+              held_out: bool = True, floor: float = ENVELOPE_FLOOR_MM * 1e-3
+              ) -> ToleranceResult:
     """Monte Carlo of fabrication errors of ``units`` (design.Unit, SI) through the map.
 
     ``sigma``: standard deviations in m by dimension (keys L, h, t, w; default
@@ -294,7 +324,8 @@ def tolerance(units, sigma=None, n: int = 1000, seed: int = 0, design_map=None,
     generator's seed (identical inputs give identical results); ``design_map``: a
     `maps.DesignMap` (default map); ``state``: "released" (default) or "actuated";
     ``stations``: envelope points per unit; ``held_out``: also measure the envelope's
-    coverage of a second, independent set of n samples (`held_out_coverage`)."""
+    coverage of a second, independent set of n samples (`held_out_coverage`); ``floor``: the
+    smallest half-width of the envelope's normal band (m, default `ENVELOPE_FLOOR_MM`)."""
     from snapmorph.design.lookup import check_state, load_map
 
     units = _check_units(units)
@@ -308,6 +339,10 @@ def tolerance(units, sigma=None, n: int = 1000, seed: int = 0, design_map=None,
         raise ValueError(f"stations (envelope points per unit) must be an integer in [3, 1000]; "
                          f"got {stations!r}")
     state = check_state(state)
+    if isinstance(floor, bool) or not isinstance(floor, (int, float, np.floating)) or \
+            not (math.isfinite(floor) and 0 <= floor <= 0.01):
+        raise ValueError(f"floor (smallest envelope half-width, m) must be in [0, 0.01] m; "
+                         f"got {floor!r}")
     dm = design_map if design_map is not None else load_map(None)
     b_map = float(dm.attrs.get("b_over_L", 0.0))
     for i, u in enumerate(units):
@@ -341,14 +376,16 @@ def tolerance(units, sigma=None, n: int = 1000, seed: int = 0, design_map=None,
         raise ValueError("no sample has every unit bistable in the map: the tolerances are too "
                          "wide for this design")
     off = res.offsets(res.samples)
-    res.lo, res.hi = off.min(axis=0), off.max(axis=0)
+    res.lo, res.hi = np.minimum(off.min(axis=0), 0.0), np.maximum(off.max(axis=0), 0.0)
+    res.floor = float(floor)
     res.time_s = time.perf_counter() - t0
     if held_out:
         d2 = _draw(units, sigma, int(n), rng)
         p2, _, _, b2, in2 = _fk_samples(dm, units, d2, state, stations)
         ok2 = in2 & np.all(b2, axis=1)
         o2 = res.offsets(p2[ok2])[..., 1]
-        within = np.all((o2 >= res.lo[..., 1]) & (o2 <= res.hi[..., 1]), axis=(-2, -1))
+        lo, hi = res.band()
+        within = np.all((o2 >= lo) & (o2 <= hi), axis=(-2, -1))
         res.held_out_coverage = float(np.mean(within)) if within.size else math.nan
     return res
 
@@ -391,9 +428,10 @@ def plot_tolerance(result: ToleranceResult, path, target=None, simulated=None):
 
     fig, ax = plt.subplots(figsize=(7, 5))
     mm = 1e3
+    band_lo, band_hi = result.band()
     for j in range(result.stations.shape[0]):
-        lo = result.stations[j] + result.lo[j, :, 1:2] * result.frames[j, :, 1, :]
-        hi = result.stations[j] + result.hi[j, :, 1:2] * result.frames[j, :, 1, :]
+        lo = result.stations[j] + band_lo[j, :, None] * result.frames[j, :, 1, :]
+        hi = result.stations[j] + band_hi[j, :, None] * result.frames[j, :, 1, :]
         poly = np.vstack([lo, hi[::-1]]) * mm
         ax.add_patch(Polygon(poly, closed=True, facecolor="tab:blue", alpha=0.25, lw=0,
                              label="envelope" if j == 0 else None))
@@ -422,4 +460,4 @@ def plot_tolerance(result: ToleranceResult, path, target=None, simulated=None):
 
 
 __all__ = ["tolerance", "ToleranceResult", "plot_tolerance", "perturbed_units", "SIGMA_DEFAULT",
-           "check_sigma"]
+           "ENVELOPE_FLOOR_MM", "check_sigma"]

@@ -26,7 +26,10 @@ from snapmorph.design.curve_fit import curve_design
 from snapmorph.design.inverse_result import Design
 from snapmorph.design.lookup import MapLookup
 from snapmorph.design.map_model import StateMap, map_state_kw
-from snapmorph.design.targets import Target, check_points
+from snapmorph.design.target_io import TargetFile, target_file_of
+from snapmorph.design.targets import Target, arc_length, check_points
+from snapmorph.design.targets_frame import DrawingFrame
+from snapmorph.design.targets_scale import check_points_scale
 from snapmorph.design.verification import assess, verify_design
 
 PLACEMENTS = ("best", "clamped")
@@ -35,7 +38,8 @@ STATES = ("released", "actuated")
 
 
 def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
-                   design_map=None, tol: float = 0.01, max_controls: int = 9,
+                   design_map=None, tol: float = 0.01, tol_abs: float | None = None,
+                   select=None, units=None, max_controls: int = 9,
                    min_turn_deg: float | None = None, merge_deg: float = 0.5,
                    refine: bool | None = None, plot=None, placement: str = "best",
                    L_range=None, hL_range=None, min_barrier: float = 0.5,
@@ -45,9 +49,11 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     """Design an array whose all-snapped base matches a target within `tol` (SI units).
 
     points: the target: (N, 2) points in m in any orientation (N >= 2; a smooth parametric
-        spline through them, parametrised by arc length), or a file: CSV in mm
-        (x, y[, tangent_deg]; splined the same way), SVG (the first path's `d`, mm) or DXF (the
-        first polyline, mm); drawn curves are sampled densely and taken as drawn.
+        spline through them, parametrised by arc length), a file (`target_io.read_target_file`
+        with `select` and `units`: CSV, splined the same way; SVG and DXF curves, taken as
+        drawn), or a `target_io.TargetFile` already read. A target shorter than the shortest
+        unit the map allows at (t, w), or far longer than the longest array, is refused
+        (`targets_scale.check_scale`: the likely unit slip, in mm).
     tangents: tangent direction at each point, degrees (N,) or vectors (N, 2): the points are
         then control points and the target is the biarcs through them (the paper's S).
     tol: the largest deviation allowed, a fraction of the target's arc length (0 < tol < 1).
@@ -55,6 +61,10 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
         squares over all of them at once through the map, until the predicted all-snapped base
         is within tol; if it cannot, it warns (`UserWarning`) and returns the best design found
         (`met` False).
+    tol_abs: also the largest deviation allowed in m (None: none); the design meets both, so
+        the stricter one governs (`tol` of the result is the fraction used, `tol_governs`
+        says which). A whole-array verification that fails (`verify`) also makes `met` False.
+    select, units: read a target file with these (`target_io.read_target_file`).
     placement: "best" (the deviation after the best rigid placement of the array on the
         target; unit 1's start is then `placement` of the result) or "clamped" (unit 1's start
         held on the target's start point and tangent). Both are always reported.
@@ -102,16 +112,13 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be None or a callable progress(stage); got {progress!r}")
     tick = progress if progress is not None else (lambda stage: None)
+    tol_abs = None if tol_abs is None else check_positive("tol_abs", tol_abs)
+    source = target_file_of(points, select=select, units=units)
     drawn = False  # a curve read from a drawing (SVG, DXF) is taken as drawn, not splined
-    if isinstance(points, (str, bytes)) or hasattr(points, "__fspath__"):
-        from pathlib import Path
-
-        from snapmorph.design.target_io import read_target
-
-        drawn = Path(points).suffix.lower() in (".svg", ".dxf")
-        points, file_tangents = read_target(points)
+    if source is not None:
+        drawn, points = source.drawn, source.points
         if tangents is None:
-            tangents = file_tangents
+            tangents = source.tangents
     raw = design_map if design_map is not None else _default_dm()
     state_kw, state_used = map_state_kw(raw, state)
     paper = theta_convention == "paper"
@@ -119,6 +126,7 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     lookup = MapLookup(StateMap(raw, state_kw, paper=paper))
     designer = BiarcDesigner(lookup, t, w, min_turn_deg, merge_deg, theta_scale=2.0 if paper else 1.0)
     designer.progress = tick
+    check_points_scale(points, t, w, design_map=raw, L_range=L_range, max_units=max_units)
     tick("design")
 
     if tangents is not None:
@@ -127,11 +135,12 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
         arcs = biarcs(pts, angles)
         target_xy = sample_arcs(arcs, 65)
         check_not_crossing(target_xy)
+        tol_used = effective_tol(tol, tol_abs, arc_length(target_xy))
         design = designer.design(pts, angles, target_xy)
         design.points = pts
-        design = assess(design, target_xy, dm, state_kw, placement, tol)
+        design = assess(design, target_xy, dm, state_kw, placement, tol_used)
         if theta_convention == "ours" and (refine or (refine is None and not design.met)):
-            curve = curve_design(Target.from_polyline(target_xy), t, w, dm, tol, placement,
+            curve = curve_design(Target.from_polyline(target_xy), t, w, dm, tol_used, placement,
                                   L_range, hL_range, min_barrier, state, max_units, lookup,
                                   progress=tick)
             if curve.max_deviation < design.max_deviation:
@@ -153,16 +162,22 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
             if bad.size:
                 raise ValueError(f"controls (x of the control points, m) must lie within the "
                                  f"target's x range {x0:.6g} to {x1:.6g} m; got {bad[0]:.6g} m")
-        design = spline_design(designer, pts, controls, tol, max_controls)
+        tol_used = effective_tol(tol, tol_abs, Target.from_points(pts).length)
+        design = spline_design(designer, pts, controls, tol_used, max_controls)
         design.points = pts
         if refine and theta_convention == "ours":
             design = designer.refine(design)
-        design = assess(design, design.target, dm, state_kw, placement, tol)
+        design = assess(design, design.target, dm, state_kw, placement,
+                        effective_tol(tol, tol_abs, design.target_length))
     else:
         target = Target.from_polyline(points) if drawn else Target.from_points(points)
-        design = curve_design(target, t, w, dm, tol, placement, L_range, hL_range, min_barrier,
-                               state, max_units, lookup, progress=tick)
+        design = curve_design(target, t, w, dm, effective_tol(tol, tol_abs, target.length),
+                              placement, L_range, hL_range, min_barrier, state, max_units,
+                              lookup, progress=tick)
         design.points = target.points
+    design.tol_rel, design.tol_abs = tol, tol_abs
+    design.source = source if source is not None else TargetFile(
+        np.asarray(points, dtype=float), None, DrawingFrame("csv"), source="points")
     design.state = state_used
     design.theta_convention = theta_convention
     if theta_convention == "paper":
@@ -177,16 +192,25 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     if verify:
         tick("verify")
         verify_design(design)
-    if not design.met and theta_convention == "ours":
+    if design.max_deviation > design.tol and theta_convention == "ours":
         warnings.warn(f"tolerance missed: the best design deviates {100 * design.max_deviation:.2f} % "
-                      f"of the target length > tol {100 * tol:.2f} % ({placement} placement)",
-                      UserWarning, stacklevel=2)
+                      f"of the target length > tol {100 * design.tol:.2f} % ({placement} "
+                      "placement)", UserWarning, stacklevel=2)
+    if design.verification_failure:
+        warnings.warn(f"verification failed: {design.verification_failure}", UserWarning,
+                      stacklevel=2)
     if plot is not None:
         tick("plot")
         from snapmorph.design.plots import plot_design
 
         plot_design(design, plot)
     return design
+
+
+def effective_tol(tol: float, tol_abs: float | None, length: float) -> float:
+    """The fraction of the target's length a design must meet: `tol`, or `tol_abs` (m) over
+    `length` (m) when that is stricter."""
+    return tol if tol_abs is None else min(tol, tol_abs / length)
 
 
 def _default_dm():

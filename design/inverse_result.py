@@ -54,6 +54,15 @@ class Design:
     theta_convention: str = "ours"
     #: whole-array simulation (`verify_design`), None until verified
     verification: dict | None = None
+    #: why the whole-array verification failed (status not ok, or its deviation misses tol);
+    #: None when it passed or did not run. A failed verification makes `met` False
+    verification_failure: str | None = None
+    #: the tolerances asked for: a fraction of the target's length and an absolute one (m,
+    #: None if not given); `tol` is the stricter of the two, as a fraction
+    tol_rel: float | None = None
+    tol_abs: float | None = None
+    #: the target as read (`target_io.TargetFile`: points, drawing frame), None if unknown
+    source: object | None = None
     notes: list = field(default_factory=list)
     limits: object | None = None
     time: float = 0.0
@@ -88,12 +97,20 @@ class Design:
         return "\n".join(lines)
 
     def write(self, out_dir, bed_length_mm: float | None = None, colours: dict | None = None,
-              drawings: bool = True) -> list:
-        """Write units.csv, predicted.csv (mm), design.png, design.txt and (unless drawings is
-        False) the DXF/SVG drawings into out_dir; returns the paths."""
+              drawings: bool = True, *, bed=None, kerf_mm: float = 0.0, stl: bool = True,
+              assembly: bool = True) -> list:
+        """Write into out_dir: units.csv, predicted.csv (simulated.csv), target.csv (the curve
+        as read, mm), overlay.svg/.dxf (target, predicted, simulated in the drawing's own
+        coordinates: `targets_frame.write_in_drawing_frame`), design.png, design.txt and,
+        unless drawings is False, the workshop files (`workshop.write_workshop`: drawings,
+        nested on sheets of `bed` "600x400" when given, `kerf_mm`, STL molds, assembly sheet;
+        a part larger than a common bed without `bed` is a `drawings.BedWarning`). Returns the
+        paths."""
+        import warnings
         from pathlib import Path
 
         from snapmorph.design.plots import plot_design
+        from snapmorph.design.targets_frame import write_in_drawing_frame, write_target_csv
         from snapmorph.design.units import write_units_csv
 
         out = Path(out_dir)
@@ -104,18 +121,62 @@ class Design:
         np.savetxt(out / "predicted.csv", self.predicted * 1e3, delimiter=",", fmt="%.4f",
                    header="x_mm,y_mm", comments="")
         paths.append(out / "predicted.csv")
-        if self.verification is not None:
-            np.savetxt(out / "simulated.csv", self.verification["xy"] * 1e3, delimiter=",",
+        simulated = None if self.verification is None else self.verification["xy"]
+        if simulated is not None:
+            np.savetxt(out / "simulated.csv", simulated * 1e3, delimiter=",",
                        fmt="%.4f", header="x_mm,y_mm", comments="")
             paths.append(out / "simulated.csv")
+        if self.source is not None:
+            paths.append(write_target_csv(self.source.points, out / "target.csv"))
+            paths += write_in_drawing_frame(self.source.frame, {
+                "target": self.source.points, "predicted": self.predicted,
+                "simulated": simulated}, out)
         paths.append(plot_design(self, out / "design.png"))
         (out / "design.txt").write_text(self.summary() + "\n")
         paths.append(out / "design.txt")
         if drawings:
-            from snapmorph.design.drawings import write_drawings
+            from snapmorph.design.drawings import BedWarning
+            from snapmorph.design.workshop import write_workshop
 
-            paths += write_drawings(self.units, out, bed_length_mm=bed_length_mm, colours=colours)
+            ws = write_workshop(self.units, out, bed=bed, bed_length_mm=bed_length_mm,
+                                kerf_mm=kerf_mm, colours=colours, stl=stl, assembly=assembly,
+                                shape_xy=self.predicted)
+            paths += ws.paths
+            for msg in ws.warnings:
+                warnings.warn(msg, BedWarning, stacklevel=2)
         return paths
+
+    @property
+    def tol_governs(self) -> str:
+        """Which tolerance `tol` is: "relative" (the fraction asked) or "absolute" (the
+        absolute one, stricter for this target's length)."""
+        if self.tol_abs is not None and (self.tol_rel is None or self.tol < self.tol_rel):
+            return "absolute"
+        return "relative"
+
+    def _verdict(self) -> list:
+        """The summary's lines on the tolerance: which one governs, met or missed, and a failed
+        whole-array verification."""
+        L, mode = self.target_length, self.placement_mode
+        what = f"tolerance {100 * self.tol:.2f} % = {self.tol * L * 1e3:.2f} mm ({mode} placement"
+        if self.tol_abs is not None:
+            rel = self.tol_rel if self.tol_rel is not None else self.tol
+            what += (f"; the absolute {self.tol_abs * 1e3:.2f} mm governs, stricter than "
+                     f"{100 * rel:.2f} %" if self.tol_governs == "absolute" else
+                     f"; {100 * rel:.2f} % governs, stricter than the absolute "
+                     f"{self.tol_abs * 1e3:.2f} mm")
+        what += ")"
+        dev = f"{100 * self.max_deviation:.2f} %, {self.max_deviation * L * 1e3:.2f} mm"
+        if self.max_deviation > self.tol:
+            lines = [f"TOLERANCE MISSED: {dev} > {what}; this is the best design found"]
+        elif self.verification_failure:
+            lines = [f"{what}: predicted within it ({dev}), but not confirmed"]
+        else:
+            lines = [f"{what}: met ({dev})"]
+        if self.verification_failure:
+            lines.append(f"VERIFICATION FAILED: {self.verification_failure}; the design is not "
+                         "met")
+        return lines
 
     def summary(self) -> str:
         """The table and the deviations, as printed by `snapmorph design`."""
@@ -127,7 +188,8 @@ class Design:
         rows = [("predicted (map)", self.deviations)]
         if self.verification is not None:
             v = self.verification
-            rows.append((f"simulated array ({v['status']}, {v['time']:.1f} s)", v["deviations"]))
+            rows.append((f"simulated array ({v['status'].split(':')[0]}, {v['time']:.1f} s)",
+                         v["deviations"]))
         text.append("deviation from the target, % of its length (max / RMS, max in mm):")
         for name, devs in rows:
             for mode, what in (("best", "best rigid placement"),
@@ -142,13 +204,7 @@ class Design:
                         f"{100 * self.rms_deviation:.2f} % (max "
                         f"{self.max_deviation * L * 1e3:.2f} mm)")
         if self.tol is not None:
-            if self.met:
-                text.append(f"tolerance {100 * self.tol:.2f} % ({self.placement_mode} placement): "
-                            f"met ({100 * self.max_deviation:.2f} %)")
-            else:
-                text.append(f"TOLERANCE MISSED: {100 * self.max_deviation:.2f} % > "
-                            f"{100 * self.tol:.2f} % ({self.placement_mode} placement); this is "
-                            "the best design found")
+            text += self._verdict()
         if self.placement is not None:
             x0, y0, a = self.placement
             text.append(f"placement of unit 1's start: x0 = {x0 * 1e3:.2f} mm, y0 = {y0 * 1e3:.2f} "
@@ -164,13 +220,18 @@ class Design:
 
 
 def _mark_missed(path, design) -> None:
-    """Add a comment line to a written units.csv saying the tolerance was missed."""
+    """Add comment lines to a written units.csv saying the tolerance was missed or the
+    whole-array verification failed."""
     from pathlib import Path
 
     path = Path(path)
     lines = path.read_text().splitlines(keepends=True)
-    note = (f"# TOLERANCE MISSED: best design found, deviation {100 * design.max_deviation:.2f} % > "
-            f"tol {100 * design.tol:.2f} % of the target length ({design.placement_mode} "
-            "placement)\n")
+    notes = []
+    if design.max_deviation > design.tol:
+        notes.append(f"# TOLERANCE MISSED: best design found, deviation "
+                     f"{100 * design.max_deviation:.2f} % > tol {100 * design.tol:.2f} % of the "
+                     f"target length ({design.placement_mode} placement)\n")
+    if design.verification_failure:
+        notes.append(f"# VERIFICATION FAILED: {design.verification_failure}\n")
     k = 1 if lines and lines[0].startswith("# placement") else 0
-    path.write_text("".join(lines[:k] + [note] + lines[k:]))
+    path.write_text("".join(lines[:k] + notes + lines[k:]))

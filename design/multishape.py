@@ -77,6 +77,7 @@ from snapmorph.design.multishape_fit import _fit_layout, _JointFit
 from snapmorph.design.nearest import measure
 from snapmorph.design.targets import Target, place_rigid
 from snapmorph.design.units import Unit
+from snapmorph.design.verification import verification_failure
 
 __all__ = ["MultiDesign", "inverse_design_multi", "verify_multi"]
 
@@ -101,7 +102,8 @@ class MultiDesign:
     patterns[k]: one bool per unit, True = snapped, for target k; deviations[k]: {"best":
     (max, rms), "clamped": (max, rms)} of the map's prediction; met[k]: deviation with
     `placement_mode` <= tol; verification[k] (after `verify_multi`): the whole array simulated
-    in pattern k ({"status", "time", "xy", "deviations", "max_deviation", ...})."""
+    in pattern k ({"status", "time", "xy", "deviations", "max_deviation", "failure", ...});
+    a target whose verification fails (`verification.verification_failure`) is not met."""
 
     units: list
     patterns: tuple
@@ -151,6 +153,13 @@ class MultiDesign:
     @property
     def met_all(self) -> bool:
         return all(self.met)
+
+    @property
+    def failures(self) -> tuple:
+        """Per target: why its whole-array verification failed, or None (passed, not run)."""
+        if self.verification is None:
+            return (None,) * len(self.targets)
+        return tuple(v.get("failure") for v in self.verification)
 
     def __repr__(self):
         n = sum(not u.is_spacer for u in self.units)
@@ -209,15 +218,21 @@ class MultiDesign:
                          f"{100 * v['deviations']['clamped'][0]:.2f} / "
                          f"{100 * v['deviations']['clamped'][1]:.2f}")
             dev = d[self.placement_mode][0]
-            line += (f"  -> met ({100 * dev:.2f} % <= {100 * self.tol:.2f} %, "
-                     f"{dev * self.targets[k].length * 1e3:.2f} mm)" if self.met[k] else
-                     f"  -> TOLERANCE MISSED ({100 * dev:.2f} % > {100 * self.tol:.2f} %, "
-                     f"{dev * self.targets[k].length * 1e3:.2f} mm)")
+            mm = f"{dev * self.targets[k].length * 1e3:.2f} mm"
+            line += (f"  -> met ({100 * dev:.2f} % <= {100 * self.tol:.2f} %, {mm})"
+                     if self.met[k] else
+                     f"  -> TOLERANCE MISSED ({100 * dev:.2f} % > {100 * self.tol:.2f} %, {mm})"
+                     if dev > self.tol else
+                     f"  -> VERIFICATION FAILED ({self.failures[k]})")
             text.append(line)
-        if not self.met_all:
-            text.append("TOLERANCE MISSED for " + ", ".join(
-                f"T{k + 1}" for k, m in enumerate(self.met) if not m) + ": this is the best "
-                "design found")
+        missed = [f"T{k + 1}" for k, d in enumerate(self.max_deviations) if d > self.tol]
+        if missed:
+            text.append("TOLERANCE MISSED for " + ", ".join(missed) + ": this is the best "
+                        "design found")
+        failed = [f"T{k + 1}" for k, f in enumerate(self.failures) if f]
+        if failed:
+            text.append("VERIFICATION FAILED for " + ", ".join(failed) + ": the whole-array "
+                        "simulation does not confirm the design; not met")
         text += [f"note: {note}" for note in self.notes]
         return "\n".join(text)
 
@@ -250,11 +265,12 @@ class MultiDesign:
                                     placement=self.placements[0][mode])
         if not self.met_all:
             lines = units_csv.read_text().splitlines(keepends=True)
-            note = ("# TOLERANCE MISSED for " + ", ".join(
-                f"T{k + 1} ({100 * self.max_deviations[k]:.2f} % > {100 * self.tol:.2f} %)"
-                for k, m in enumerate(self.met) if not m) + f"; best design found ({mode} "
-                "placement)\n")
-            units_csv.write_text("".join(lines[:1] + [note] + lines[1:]))
+            notes = [f"# TOLERANCE MISSED for T{k + 1} ({100 * d:.2f} % > {100 * self.tol:.2f} "
+                     f"%); best design found ({mode} placement)\n"
+                     for k, d in enumerate(self.max_deviations) if d > self.tol]
+            notes += [f"# VERIFICATION FAILED for T{k + 1}: {f}\n"
+                      for k, f in enumerate(self.failures) if f]
+            units_csv.write_text("".join(lines[:1] + notes + lines[1:]))
         paths = [units_csv, self._write_patterns(out / "patterns.csv")]
         for k in range(len(self.targets)):
             p = out / f"predicted_{k + 1}.csv"
@@ -569,9 +585,13 @@ def inverse_design_multi(targets, t: float, w: float, *, tol: float = 0.02,
     if verify:
         tick("verify")
         verify_multi(md, nodes=nodes)
-    if not md.met_all:
-        missed = ", ".join(f"target {k + 1} ({names[k]}: {100 * d[placement][0]:.2f} %)"
-                           for k, d in enumerate(devs) if d[placement][0] > tol)
+    for k, failure in enumerate(md.failures):
+        if failure:
+            warnings.warn(f"verification failed for target {k + 1} ({names[k]}): {failure}",
+                          UserWarning, stacklevel=2)
+    missed = ", ".join(f"target {k + 1} ({names[k]}: {100 * d[placement][0]:.2f} %)"
+                       for k, d in enumerate(devs) if d[placement][0] > tol)
+    if missed:
         msg = (f"tolerance missed: the best array found deviates from {missed} > tol "
                f"{100 * tol:.2f} % ({placement} placement); no array of these units' ranges "
                f"was found that meets every target (tried {len(tried)} layouts, up to "
@@ -628,4 +648,10 @@ def verify_multi(md: MultiDesign, nodes: int | None = None) -> list:
                     "deviations": devs, "placements": places,
                     "max_deviation": devs[md.placement_mode][0], "state": r.state})
     md.verification = out
+    # a target whose verification fails is never met (`verification_failure`)
+    for v, tg in zip(out, md.targets):
+        v["failure"] = verification_failure(v["status"], v["max_deviation"], md.tol,
+                                            md.placement_mode, tg.length)
+    md.met = tuple(bool(d <= md.tol) and not v["failure"]
+                   for d, v in zip(md.max_deviations, out))
     return out

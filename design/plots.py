@@ -88,7 +88,8 @@ def plot_design(design, path, title: str | None = None) -> Path:
                                   gridspec_kw={"height_ratios": [h1, h2]}, constrained_layout=True)
     T = design.target * 1e3
     ax.plot(T[:, 0], T[:, 1], "-", color="0.6", lw=5, alpha=0.6, label="target")
-    if design.points is not None:
+    drawn = getattr(getattr(design, "source", None), "drawn", False)
+    if design.points is not None and not drawn:  # a drawn curve's vertices are no data points
         ax.plot(design.points[:, 0] * 1e3, design.points[:, 1] * 1e3, "o", color="0.3", ms=4,
                 label="target points" if len(design.points) != len(design.control_points) else None)
     for j, (piece, u) in enumerate(zip(design.pieces, design.units)):
@@ -140,9 +141,11 @@ def _design_title(design) -> str:
         text += f" ({design.placement_mode} placement)"
     v = getattr(design, "verification", None)
     if v is not None:
-        text += f"\nsimulated array: {100 * v['max_deviation']:.2f} %"
+        status = "" if v["status"] == "ok" else f" ({v['status'].split(':')[0]})"
+        text += f"\nsimulated array{status}: {100 * v['max_deviation']:.2f} %"
     if getattr(design, "met", None) is False:
-        text += f"   TOLERANCE {100 * design.tol:.2f} % MISSED"
+        text += (f"   TOLERANCE {100 * design.tol:.2f} % MISSED"
+                 if design.max_deviation > design.tol else "   VERIFICATION FAILED")
     return text
 
 

@@ -13,32 +13,24 @@ from pathlib import Path
 
 import numpy as np
 
-from snapmorph.design.biarcs import biarcs, sample_arcs
 from snapmorph.design.targets import Target
-
-#: samples per biarc arc when a CSV target gives tangents (as `inverse_design` samples them)
-_ARC_SAMPLES = 65
 
 
 def as_target(obj, what: str = "target") -> Target:
     """`obj` as a `Target` (SI). ValueError naming `what` when it is none of the accepted
-    forms: a Target, (N, 2) points in m, or a .csv/.svg/.dxf file in mm."""
+    forms: a Target, (N, 2) points in m, a .csv/.svg/.dxf file in mm or a
+    `target_io.TargetFile` (read with `read_target_file`, e.g. with a `select`)."""
+    from snapmorph.design.target_io import TargetFile, read_target_file
+
     if isinstance(obj, Target):
         return obj
+    if isinstance(obj, TargetFile):
+        return obj.target(what=what)
     if isinstance(obj, (str, bytes)) or hasattr(obj, "__fspath__"):
-        from snapmorph.design.target_io import read_target
-
         path = Path(obj.decode() if isinstance(obj, bytes) else obj)
         if not path.is_file():
             raise ValueError(f"{what}: target file not found: {path}")
-        points, tangents = read_target(path)
-        if tangents is not None:
-            angles = np.unwrap(np.radians(np.asarray(tangents, dtype=float)))
-            return Target.from_polyline(sample_arcs(biarcs(points, angles), _ARC_SAMPLES),
-                                        what=f"{what} ({path.name})")
-        if path.suffix.lower() in (".svg", ".dxf"):
-            return Target.from_polyline(points, what=f"{what} ({path.name})")
-        return Target.from_points(points, what=f"{what} ({path.name})")
+        return read_target_file(path).target(what=f"{what} ({path.name})")
     try:
         arr = np.asarray(obj, dtype=float)
     except (TypeError, ValueError):

@@ -50,6 +50,46 @@ class TargetFile:
     def length_mm(self) -> float:
         return float(np.sum(np.hypot(*np.diff(self.points, axis=0).T))) * 1e3
 
+    @property
+    def drawn(self) -> bool:
+        """A curve from a drawing (SVG, DXF): taken as drawn, not splined through its points."""
+        return self.frame.kind in ("svg", "dxf")
+
+    def target(self, what: str = "target"):
+        """This curve as a `design.Target`: a drawn curve as drawn, CSV points with tangents as
+        the biarcs through them, other CSV points by the spline through them."""
+        from snapmorph.design.biarcs import biarcs, sample_arcs
+        from snapmorph.design.targets import Target
+
+        if self.tangents is not None:
+            angles = np.unwrap(np.radians(np.asarray(self.tangents, dtype=float)))
+            return Target.from_polyline(sample_arcs(biarcs(self.points, angles), ARC_SAMPLES),
+                                        what=what)
+        if self.drawn:
+            return Target.from_polyline(self.points, what=what)
+        return Target.from_points(self.points, what=what)
+
+
+#: samples per biarc arc when a CSV target gives tangents (as `inverse_design` samples them)
+ARC_SAMPLES = 65
+
+
+def target_file_of(obj, select=None, units=None) -> TargetFile | None:
+    """`obj` as a `TargetFile` when it is one or names a file (read with `select`, `units`);
+    None for points (then `select` and `units` must be None)."""
+    if isinstance(obj, TargetFile):
+        if select is not None or units is not None:
+            raise ValueError("select and units apply to a target file's path, not to a "
+                             "TargetFile already read")
+        return obj
+    if isinstance(obj, (str, bytes)) or hasattr(obj, "__fspath__"):
+        return read_target_file(obj.decode() if isinstance(obj, bytes) else obj, select=select,
+                                units=units)
+    if select is not None or units is not None:
+        raise ValueError("select and units apply to a target file (.svg, .dxf, .csv); the "
+                         "target given is points")
+    return None
+
 
 def read_target(path, select=None, units=None):
     """(points (N, 2) in m, tangents (N,) in degrees or None) of the one open curve of a .svg,

@@ -25,6 +25,9 @@ SHORT_SLIPS = (("metres", 1000.0, "m"), ("inches", 25.4, "in"), ("cm", 10.0, "cm
 LONG_SLIPS = (("metres", 1000.0), ("inches", 25.4), ("cm", 10.0))
 #: a slip is suggested only when the corrected length is at most this (mm) long
 PLAUSIBLE_MM = 3000.0
+#: `check_points_scale` bounds the length with at least this many units (the default
+#: max_units), so that a smaller max_units is left to the design's own message about it
+SLIP_MAX_UNITS = 40
 
 
 def unit_length_range(t: float, w: float, design_map=None, L_range=None) -> tuple:
@@ -74,6 +77,28 @@ def check_scale(length_m: float, t: float, w: float, *, design_map=None, L_range
         raise TargetError(f"target {_mm(mm)} mm long: far longer than the longest array "
                           f"({longest * 1e3:.0f} mm: {max_units} units of at most "
                           f"{hi * 1e3:.1f} mm {at}, spacers between){hint}", "too-long")
+
+
+def check_points_scale(points, t: float, w: float, **kw) -> None:
+    """`check_scale` for a target given as (N, 2) points in m, once they can be measured:
+    points that cannot (too few, not finite, zero length) are left to the design's own
+    checks, bounds that leave no unit length to its message about them, and so is a max_units
+    below `SLIP_MAX_UNITS`. `kw`: as `check_scale` takes them."""
+    import math
+
+    import numpy as np
+
+    try:
+        p = np.asarray(points, dtype=float)
+        unit_length_range(t, w, kw.get("design_map"), kw.get("L_range"))
+    except (TypeError, ValueError):
+        return
+    if p.ndim != 2 or p.shape[1] != 2 or len(p) < 2:
+        return
+    length = float(np.sum(np.hypot(*np.diff(p, axis=0).T)))
+    if math.isfinite(length) and length > 0:
+        kw["max_units"] = max(int(kw.get("max_units", SLIP_MAX_UNITS)), SLIP_MAX_UNITS)
+        check_scale(length, t, w, **kw)
 
 
 def _mm(v: float) -> str:

@@ -43,7 +43,10 @@ def verify_design(design: Design, nodes: int | None = None) -> dict:
     """Simulate the designed array as a whole (`design.arrays.simulate_array`, every arched unit
     snapped in order, actuators removed) and measure its base against the target both ways.
     Returns (and stores as `design.verification`) {"status", "time", "xy" (placed as the design
-    says), "deviations": {"best": (max, rms), "clamped": (max, rms)}, "placements": ...}."""
+    says), "deviations": {"best": (max, rms), "clamped": (max, rms)}, "placements": ...,
+    "failure"}. A failed verification (`verification_failure`: the simulation did not end ok,
+    or its deviation misses the design's tol) is never met: `design.met` becomes False and
+    `design.verification_failure` says why."""
     import time
 
     from snapmorph.design.arrays import simulate_array
@@ -60,8 +63,29 @@ def verify_design(design: Design, nodes: int | None = None) -> dict:
     bx, by, ba = out["placements"]["best"]
     out["xy_best"] = place_rigid(local, (bx, by), ba)
     out["max_deviation"], out["rms_deviation"] = out["deviations"][design.placement_mode]
+    out["failure"] = verification_failure(r.status, out["max_deviation"], design.tol,
+                                          design.placement_mode, design.target_length)
     design.verification = out
+    design.verification_failure = out["failure"]
+    if design.tol is not None:
+        design.met = bool(design.max_deviation <= design.tol) and not out["failure"]
     return out
+
+
+def verification_failure(status: str, max_deviation: float, tol: float | None,
+                         placement: str, length: float) -> str | None:
+    """Why a whole-array simulation does not confirm a design (None when it does): it did not
+    end "ok" (not converged, snapped back, ...), or its deviation (a fraction of the target's
+    `length`, m) with the `placement` the tolerance applies to is above `tol`."""
+    if status != "ok":
+        return f"the whole-array simulation ended {status!r}, not ok"
+    if not math.isfinite(max_deviation):
+        return "the simulated array's deviation is not finite"
+    if tol is not None and max_deviation > tol:
+        return (f"the simulated array deviates {100 * max_deviation:.2f} % "
+                f"({max_deviation * length * 1e3:.2f} mm) > tol {100 * tol:.2f} % "
+                f"({placement} placement)")
+    return None
 
 
 def start_tangent(target_xy: np.ndarray) -> float:

@@ -72,8 +72,15 @@ def _fixtures(tmp):
     (tmp / "units.csv").write_text("unit,L_mm,h_mm,t_mm,w_mm,side\n1,100,20,0.5,5,1\n"
                                    "2,60,0,0.5,5,0\n3,100,20,0.5,5,-1\n")
     (tmp / "target.csv").write_text("x_mm,y_mm\n0,0\n100,40\n200,15\n300,50\n400,0\n")
+    (tmp / "two.svg").write_text(  # two open curves: a target file needs --select
+        '<svg xmlns="http://www.w3.org/2000/svg" width="400mm" height="300mm" '
+        'viewBox="0 0 400 300"><path id="a" d="M 0 250 A 200 200 0 0 0 200 50"/>'
+        '<path id="b" d="M 0 280 L 300 280"/></svg>')
+    (tmp / "metres.csv").write_text("x_mm,y_mm\n0,0\n0.1,0.04\n0.2,0.015\n0.3,0.05\n0.4,0\n")
+    (tmp / "tiny.csv").write_text("x_mm,y_mm\n0,0\n3,1\n6,1.5\n9.5,1\n")
     places = {"tmp": tmp, "units": tmp / "units.csv", "file": tmp / "plain.txt",
-              "dir": tmp / "folder", "target": tmp / "target.csv", "garbage": tmp / "garbage.txt"}
+              "dir": tmp / "folder", "target": tmp / "target.csv", "garbage": tmp / "garbage.txt",
+              "svg2": tmp / "two.svg", "metres": tmp / "metres.csv", "tiny": tmp / "tiny.csv"}
     return {k: str(v) for k, v in places.items()}
 
 

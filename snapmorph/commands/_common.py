@@ -27,13 +27,18 @@ from snapmorph.cli import CommandError
 __all__ = [
     "CommandError",
     "PLOT_SUFFIXES",
+    "TARGET_UNITS",
+    "add_target_options",
+    "bed_size",
     "input_file",
     "integer",
     "length_mm",
     "number",
     "output_dir",
     "output_file",
+    "per_target",
     "plot_file",
+    "read_target_arg",
 ]
 
 # File types matplotlib's Agg/PDF/SVG/PS backends write.
@@ -108,6 +113,89 @@ def integer(low=None, high=None, *, what: str = ""):
 
     parse.__name__ = "integer"
     return parse
+
+
+def bed_size(text: str) -> tuple:
+    """An argparse ``type=`` for --bed: "600x400" (a sheet, mm) or "600" (a strip length,
+    mm), as (width, height) or (length,)."""
+    from snapmorph.design.nesting import parse_bed
+
+    try:
+        width, height = parse_bed(text)
+    except (TypeError, ValueError):
+        raise argparse.ArgumentTypeError(
+            f"must be WIDTHxHEIGHT of the laser bed in mm (e.g. 600x400), or one length in mm "
+            f"(the longest base piece), each > 0; got {text!r}") from None
+    return (width,) if height is None else (width, height)
+
+
+#: length units a target file (CSV, DXF) may be declared in
+TARGET_UNITS = ("mm", "cm", "m", "in")
+
+
+def add_target_options(p, units_option: str = "--units", what: str = "the target",
+                       several: bool = False) -> None:
+    """--select ID|LAYER and the length unit (`units_option`, dest ``target_units``) of a
+    target file; `several`: given once for every target or once per target, in order."""
+    each = (" Once for every target, or once per target in order ('-': none)." if several
+            else "")
+    kw = {"action": "append"} if several else {}
+    p.add_argument("--select", metavar="ID|LAYER", default=None, **kw,
+                   help=f"the curve of {what} when the drawing holds several: an SVG element "
+                        f"id, Inkscape layer or group, DXF layer or handle.{each}")
+    allowed = TARGET_UNITS + (("-",) if several else ())
+
+    def unit(text: str) -> str:
+        if text not in allowed:
+            raise argparse.ArgumentTypeError(
+                f"must be one of {', '.join(TARGET_UNITS)} (the target file's length unit"
+                + ("; '-': none for that target" if several else "") + f"); got {text!r}")
+        return text
+
+    p.add_argument(units_option, dest="target_units", default=None, metavar="|".join(TARGET_UNITS),
+                   type=unit, **kw,
+                   help=f"length unit of {what} when a CSV header or a DXF's $INSUNITS does "
+                        f"not say (an SVG carries its own).{each}")
+
+
+def per_target(args, n: int) -> list:
+    """[(select, units)] for n targets from --select and --units (`add_target_options` with
+    several=True), each given never, once (for every target) or once per target ('-': none)."""
+    out = []
+    for option, values in (("--select", args.select), ("--units", args.target_units)):
+        values = list(values or [None])
+        if len(values) not in (1, n):
+            raise CommandError(f"{option} is given {len(values)} times for {n} target(s): give "
+                               f"it once (every target) or once per target ('-': none)")
+        out.append([None if v == "-" else v for v in (values * n if len(values) == 1
+                                                      else values)])
+    return list(zip(*out))
+
+
+def read_target_arg(path, option: str | None = None, select=None, units=None,
+                    units_option: str = "--units"):
+    """A target file as a `design.target_io.TargetFile`; every refusal (no such file, several
+    curves, closed, wrong units, ...) a `CommandError` of one line in mm."""
+    from snapmorph.design.target_io import read_target_file
+
+    where = f"{option} {path}" if option else str(path)
+    if not Path(os.path.expanduser(str(path))).exists():
+        raise CommandError(f"{option + ': ' if option else ''}target file not found: {path}")
+    input_file(path, option or "target")
+    suffix = Path(str(path)).suffix.lower()
+    if units is not None and suffix == ".svg":
+        raise CommandError(f"{units_option} {units}: {where} is an SVG, which carries its own "
+                           f"units (width, height, viewBox); {units_option} is for CSV and DXF "
+                           "files")
+    if select is not None and suffix not in (".svg", ".dxf"):
+        raise CommandError(f"--select {select}: {where} is a CSV, which holds one curve; "
+                           "--select is for SVG and DXF files")
+    try:
+        return read_target_file(path, select=select, units=units)
+    except ValueError as exc:
+        message = str(exc) if units_option == "--units" else \
+            str(exc).replace("--units", units_option)
+        raise CommandError(message if not option else f"{option}: {message}") from None
 
 
 def add_unit_dimensions(p, *, L_what: str = "base length", L_help: str = "base length, mm",

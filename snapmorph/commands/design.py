@@ -1,14 +1,22 @@
 """`snapmorph design`: inverse design of an array from a target shape (issue 10).
 
-Exit status: 0 when the design meets --tol, 1 when it does not (the best design found is still
-written, and marked so in design.txt and units.csv), 2 for bad input (one line, in mm).
+The target is read as a drawing program wrote it (`design.target_io.read_target_file`:
+`--select`, `--units`; its notes printed), refused with one line when its length cannot be an
+array's (`design.targets_scale.check_scale`: the likely unit slip), designed, and written in
+the drawing's own frame (target.csv, overlay.svg/.dxf) with the workshop's files
+(`design.workshop`: `--bed`, `--kerf`, STL molds, assembly sheet).
+
+Exit status: 0 when the design meets --tol (and --tol-mm) and its whole-array verification
+confirms it, 1 when not (the best design found is still written, and marked TOLERANCE MISSED
+or VERIFICATION FAILED in design.txt and units.csv), 2 for bad input (one line, in mm).
 """
 
 from __future__ import annotations
 
 import argparse
 
-from snapmorph.commands._common import add_unit_state_option, integer, number
+from snapmorph.commands._common import (add_target_options, add_unit_state_option, bed_size,
+                                        integer, length_mm, number)
 
 HELP = "design an array of units that snaps into a target shape; write units.csv, drawings, plots"
 
@@ -16,13 +24,17 @@ HELP = "design an array of units that snaps into a target shape; write units.csv
 def add_parser(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "design", help=HELP, description=HELP + ".",
-        epilog="target: a CSV of lines 'x_mm, y_mm' (any open curve, in any orientation) or "
-               "'x_mm, y_mm, tangent_deg' (control points with tangents: biarcs through them); "
-               "an SVG file (the first <path>'s d: lines, arcs, Béziers; units mm, y up as seen); "
-               "or a DXF file (the first polyline, mm). Exit status 1 when --tol is missed.",
+        epilog="target: the one open curve of an SVG (Inkscape: every transform and the "
+               "document's units) or DXF file (lines, arcs, polylines, splines, ellipses, "
+               "blocks; $INSUNITS), pieces whose ends meet joined, closed curves never; "
+               "--select chooses among several; or a CSV of lines 'x_mm, y_mm' (any open "
+               "curve, in any orientation) or 'x_mm, y_mm, tangent_deg' (control points with "
+               "tangents: biarcs through them). Exit status 1 when --tol (--tol-mm) is missed "
+               "or the whole-array verification fails.",
     )
-    p.add_argument("target", nargs="+", help="target file: .csv, .svg or .dxf (mm); two or more: "
+    p.add_argument("target", nargs="+", help="target file: .svg, .dxf or .csv; two or more: "
                    "one array with one snap pattern per target (issue 24)")
+    add_target_options(p, several=True)
     p.add_argument("--t", type=float, required=True, help="sheet thickness (mm)")
     p.add_argument("--w", type=float, required=True, help="strip width (mm)")
     p.add_argument("--out", default="build/design", help="output directory (default %(default)s)")
@@ -30,6 +42,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--tol", type=float, default=None,
                    help="largest deviation allowed, a fraction of the target's length "
                         "(default 0.01 = 1 %%; 0.02 with several targets)")
+    p.add_argument("--tol-mm", type=length_mm(what="largest deviation allowed"), default=None,
+                   metavar="MM", help="largest deviation allowed in mm (> 0); with --tol the "
+                   "design meets both (the stricter governs)")
     p.add_argument("--placement", choices=("best", "clamped"), default="best",
                    help="the deviation --tol applies to: after the best rigid placement, or with "
                         "unit 1's start clamped on the target's start and tangent "
@@ -62,8 +77,14 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "straight spacers")
     p.add_argument("--refine", action="store_true",
                    help="paper's procedure: also refine (L, h) by least squares")
-    p.add_argument("--bed", type=float, default=None,
-                   help="laser bed length (mm): split the base strip into pieces no longer")
+    p.add_argument("--bed", type=bed_size, default=None, metavar="WxH",
+                   help="laser bed in mm, e.g. 600x400: every part nested on sheets of that "
+                        "size (one DXF/SVG per sheet); one number: only the longest base piece "
+                        "(mm). Without it, a warning for a part larger than 600x400 mm")
+    p.add_argument("--kerf", type=length_mm(0, 2, low_inclusive=True, what="laser kerf width"),
+                   default=0.0, metavar="MM",
+                   help="laser kerf width in mm, 0 <= kerf <= 2: cuts offset by half of it "
+                        "(default 0: none)")
     p.add_argument("--colours", default=None,
                    help="layer colours as AutoCAD indices, e.g. CUT=1,ENGRAVE=5,MARKS=3")
     p.add_argument("--no-drawings", action="store_true", help="skip DXF/SVG drawings")
@@ -94,6 +115,7 @@ def run(args) -> int:
     import numpy as np
 
     from snapmorph.cli import CommandError
+    from snapmorph.commands._common import format_value, per_target, read_target_arg
 
     if args.tol is None:
         args.tol = 0.02 if len(args.target) > 1 else 0.01
@@ -104,8 +126,6 @@ def run(args) -> int:
     if not (0 < args.tol < 1):
         raise CommandError(f"--tol is a fraction of the target's length, 0 < tol < 1 "
                            f"(0.01 = 1 %), got {args.tol}")
-    if args.bed is not None and not args.bed > 0:
-        raise CommandError(f"--bed must be a positive length in mm, got {args.bed}")
     if args.max_units < 1:
         raise CommandError(f"--max-units must be >= 1, got {args.max_units}")
     if not (args.min_barrier >= 0 and math.isfinite(args.min_barrier)):
@@ -125,17 +145,23 @@ def run(args) -> int:
 
         return run_multi(args, L_range=L_range, hL_range=hL_range, colours=colours)
     args.target = args.target[0]
-    if not Path(args.target).is_file():
-        raise CommandError(f"target file not found: {args.target}")
+    select, units = per_target(args, 1)[0]
     if args.map is not None and not Path(args.map).is_file():
         raise CommandError(f"--map {args.map}: design map not found (no such file)")
+    tf = read_target_arg(args.target, select=select, units=units)
     from tqdm import tqdm
 
     from snapmorph.design import inverse_design
     from snapmorph.design.lookup import load_map
+    from snapmorph.design.targets_scale import check_points_scale
     from snapmorph.commands._common import output_dir
 
     dm = load_map(args.map)
+    print(f"target {args.target}: {tf.source}, {format_value(tf.length_mm)} mm")
+    for note in tf.notes:
+        print(f"note: {note}")
+    check_points_scale(tf.points, args.t * 1e-3, args.w * 1e-3, design_map=dm,
+                       L_range=L_range, max_units=args.max_units)  # (before the progress bar)
     output_dir(args.out)  # before the design: a folder that cannot be written fails at once
     # one bar for the whole command: it counts the work done (layouts tried, least-squares
     # evaluations of --refine) and names the stage; the whole-array simulation is one step
@@ -151,21 +177,38 @@ def run(args) -> int:
 
     with warnings.catch_warnings(), bar:
         warnings.simplefilter("ignore")  # the summary says it all, once
-        d = inverse_design(args.target, t=args.t * 1e-3, w=args.w * 1e-3, controls=controls,
-                           design_map=dm, tol=args.tol, max_controls=args.max_controls,
+        d = inverse_design(tf, t=args.t * 1e-3, w=args.w * 1e-3, controls=controls,
+                           design_map=dm, tol=args.tol,
+                           tol_abs=None if args.tol_mm is None else args.tol_mm * 1e-3,
+                           max_controls=args.max_controls,
                            min_turn_deg=args.min_turn, refine=args.refine or None,
                            placement=args.placement, L_range=L_range, hL_range=hL_range,
                            min_barrier=args.min_barrier, state=args.unit_state,
                            max_units=args.max_units, theta_convention=args.theta_convention,
                            verify=not args.no_verify, progress=progress)
-    try:
-        written = d.write(args.out, bed_length_mm=args.bed, colours=colours,
-                          drawings=not args.no_drawings)
-    except OSError as exc:
-        raise CommandError(f"cannot write into {args.out}: {exc}") from None
+    written, shop_warnings = write_design(d, args, colours)
     print(d.summary())
+    for msg in shop_warnings:
+        print(f"warning: {msg}")
     print("wrote " + ", ".join(str(p) for p in written))
     return 0 if d.met else 1
+
+
+def write_design(d, args, colours) -> tuple:
+    """(paths, workshop warnings) of `Design.write` into --out with --bed, --kerf, --colours."""
+    import warnings
+
+    from snapmorph.cli import CommandError
+    from snapmorph.design.drawings import BedWarning
+
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", BedWarning)
+            written = d.write(args.out, colours=colours, drawings=not args.no_drawings,
+                              bed=args.bed, kerf_mm=args.kerf)
+    except OSError as exc:
+        raise CommandError(f"cannot write into {args.out}: {exc}") from None
+    return written, [str(w.message) for w in caught if issubclass(w.category, BedWarning)]
 
 
 def _colours(text):

@@ -7,12 +7,15 @@ import argparse
 HELP = "shape of an array of units in a snap pattern (forward kinematics)"
 EPILOG = """Frame: when units.csv starts with a '# placement' line (written by `snapmorph
 design`), shapes, printed joints and --csv are in the target's frame (where the design put unit
-1); otherwise unit 1 starts at (0, 0) heading +x. --overlay draws a target CSV (x_mm, y_mm[,
-tangent_deg]) in the same frame and prints the largest distance from its points to the base."""
+1); otherwise unit 1 starts at (0, 0) heading +x. --overlay draws a target (the design's
+target.csv, or the SVG, DXF or CSV it was designed from: --select, --target-units as for
+`snapmorph design`) in the same frame and prints the largest distance from its points to the
+base."""
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    from snapmorph.commands._common import add_shape_options, add_snapped_option
+    from snapmorph.commands._common import (add_shape_options, add_snapped_option,
+                                            add_target_options)
 
     p = subparsers.add_parser("fk", help=HELP, description=HELP + ".", epilog=EPILOG)
     p.add_argument("--units", required=True, help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
@@ -21,11 +24,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="every snap pattern (2^n), plotted in one figure")
     add_shape_options(p, plot="write a figure (PNG/PDF/SVG)",
                       csv="write the base polyline (mm) of --snapped",
-                      overlay="draw this target (x_mm, y_mm) over the shapes, same frame",
+                      overlay="draw this target (.svg, .dxf or .csv) over the shapes, same "
+                              "frame",
                       start="start at (0, 0) heading +x")
     p.add_argument("--nearest", default=None, metavar="TARGET",
                    help="the snap pattern closest to this target (.csv/.svg/.dxf, mm), by branch "
                         "and bound over the 2^n patterns; --plot and --csv show it")
+    add_target_options(p, "--target-units", what="the --overlay or --nearest target")
     p.add_argument("--source", choices=("map", "simulate"), default="map",
                    help="unit shapes from the design map or a direct simulation "
                         "(default %(default)s)")
@@ -68,9 +73,8 @@ def check_snapped(text, units, option="--snapped"):
 
 def load_units(args):
     """(units, placement or None) from --units; the target from --overlay (m) or None."""
-    from snapmorph.design.targets import read_target_csv
     from snapmorph.design.units import read_placement, read_units_csv
-    from snapmorph.commands._common import input_file
+    from snapmorph.commands._common import input_file, read_target_arg
 
     path = input_file(args.units, "--units")
     b_over_L = getattr(args, "_b_over_L", 0.0)
@@ -78,7 +82,8 @@ def load_units(args):
     placement = None if args.no_placement else read_placement(path)
     target = None
     if args.overlay:
-        target, _ = read_target_csv(input_file(args.overlay, "--overlay"))
+        target = read_target_arg(args.overlay, "--overlay", select=args.select,
+                                 units=args.target_units, units_option="--target-units").points
     return units, placement, target
 
 

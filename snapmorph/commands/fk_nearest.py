@@ -11,10 +11,12 @@ def run_nearest(args) -> int:
     import math
 
     from snapmorph.cli import CommandError
-    from snapmorph.commands._common import input_file, output_file, plot_file
+    from snapmorph.commands._common import input_file, output_file, plot_file, read_target_arg
 
     units_path = input_file(args.units, "--units")
-    target_path = input_file(args.nearest, "--nearest")
+    target_file = read_target_arg(args.nearest, "--nearest", select=getattr(args, "select", None),
+                                  units=getattr(args, "target_units", None),
+                                  units_option="--target-units")
     if getattr(args, "map", None):
         input_file(args.map, "--map")
     for option, given in (("--all", getattr(args, "all", False)),
@@ -39,7 +41,9 @@ def run_nearest(args) -> int:
     dm = load_map(getattr(args, "map", None))
     units = read_units_csv(units_path, b_over_L=MapLookup(dm).b_over_L)
     arched = sum(not u.is_spacer for u in units)
-    r = nearest_state(units, str(target_path), design_map=dm)
+    for note in target_file.notes:
+        print(f"note: {note}")
+    r = nearest_state(units, target_file.target(what=f"--nearest {args.nearest}"), design_map=dm)
     x0, y0, a0 = r.placement
     L = r.target_length
     print(f"{args.units}: {len(units)} units ({arched} arched, 2^{arched} = {2 ** arched} "

@@ -3,6 +3,7 @@ errors through the map, and its envelope checked against whole-array simulations
 perturbed arrays."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -110,3 +111,84 @@ def test_envelope_contains_perturbed_whole_array_simulations():
         inside.append(r.envelope_contains(sim.base))
     assert sum(inside) >= 48, f"{sum(inside)} of 50 inside"
     assert r.held_out_coverage >= 0.95
+
+
+# ------------------------------------------------------------- the envelope's own nominal
+README_UNITS = Path(__file__).resolve().parents[2] / "examples" / "units_M.csv"
+
+
+def _in_drawn_band(r, curve, near=0.05e-3) -> bool:
+    """Does `curve` lie in the band as `plot_tolerance` draws it (one polygon per unit through
+    the stations moved to the band's bounds along the normal): every vertex inside, or within
+    `near` (m) of the outline, up to the band's end (a longer array's end beyond the last
+    station is the free end's scatter, drawn as such)? Between stations a drawn edge is a chord: over the
+    4 mm between two stations a curve bending as the M does near the clamp leaves the chord of
+    the 0.1 mm band by up to 0.02 mm, a thirtieth of a pixel of the 150 dpi figure."""
+    from matplotlib.path import Path as Polygon
+
+    from snapmorph.design.targets import distances_to_polyline
+
+    lo, hi = r.band()
+    rings = [np.vstack([r.stations[j] + lo[j, :, None] * r.frames[j, :, 1],
+                        (r.stations[j] + hi[j, :, None] * r.frames[j, :, 1])[::-1]])
+             for j in range(len(r.units))]
+    pts = np.asarray(curve)
+    pts = pts[(pts - r.stations[-1, -1]) @ r.frames[-1, -1, 0] <= 0]
+    hit = np.zeros(len(pts), bool)
+    for ring in rings:
+        hit |= Polygon(ring).contains_points(pts)
+        hit |= distances_to_polyline(pts, np.vstack([ring, ring[:1]])) <= near
+    return bool(hit.all())
+
+
+@pytest.mark.slow
+def test_nominal_array_inside_its_own_envelope():
+    """The README's M array (examples/units_M.csv): the Monte Carlo's range is about a
+    micrometre wide next to the clamp (every sample starts at the same point), the band
+    keeps a half-width of at least 0.05 mm; the nominal, forward kinematics and simulated as
+    a whole array, lies inside it."""
+    from snapmorph.design.arrays import simulate_array
+    from snapmorph.design.fabrication_tolerance import ENVELOPE_FLOOR_MM
+    from snapmorph.design.units import read_units_csv
+
+    units = read_units_csv(README_UNITS)
+    r = tolerance(units, n=1000, seed=0)
+    raw = (r.hi[..., 1] - r.lo[..., 1]) / 2
+    assert raw[0, 1] < 2e-6  # the range next to the clamp: ~1 um (why the band has a floor)
+    assert np.all(r.lo[..., 1] <= 0) and np.all(r.hi[..., 1] >= 0)  # the nominal is a sample
+    lo, hi = r.band()
+    assert np.min(hi - lo) / 2 == pytest.approx(ENVELOPE_FLOOR_MM * 1e-3)
+    assert r.envelope_contains(r.nominal) and _in_drawn_band(r, r.nominal)
+    sim = simulate_array(units, "111")
+    assert sim.status == "ok"
+    assert r.envelope_contains(sim.base) and _in_drawn_band(r, sim.base)
+
+
+@pytest.mark.slow
+def test_simulate_counts_agree_with_the_plot(tmp_path, capsys, monkeypatch):
+    """`snapmorph tolerance examples/units_M.csv --simulate 4` (it said "0 of 4" while its plot
+    showed all four inside): each simulated array is counted inside exactly when it lies in
+    the band as drawn; an array lifted off the band is outside both ways."""
+    import json
+
+    import snapmorph.design.fabrication_tolerance as ft
+    from snapmorph.cli import main
+
+    drawn = {}
+    real_plot = ft.plot_tolerance
+
+    def plot_tolerance(result, path, target=None, simulated=None):
+        drawn.update(result=result, simulated=simulated)
+        return real_plot(result, path, target=target, simulated=simulated)
+
+    monkeypatch.setattr(ft, "plot_tolerance", plot_tolerance)
+    code = main(["tolerance", str(README_UNITS), "--simulate", "4", "--plot",
+                 str(tmp_path / "tol.png"), "--json", str(tmp_path / "tol.json")])
+    out = capsys.readouterr().out
+    assert code == 0 and "4 of 4 inside the envelope" in out
+    counted = json.loads((tmp_path / "tol.json").read_text())["simulated_inside"]
+    r, curves = drawn["result"], drawn["simulated"]
+    assert counted == [_in_drawn_band(r, c) for c in curves] == [True] * 4
+    lifted = curves[0] + 3 * np.max(r.hi[..., 1] - r.lo[..., 1]) * np.array([0.0, 1.0]) * \
+        (np.hypot(*curves[0].T) > 0.5 * np.hypot(*curves[0][-1]))[:, None]
+    assert not r.envelope_contains(lifted) and not _in_drawn_band(r, lifted)
