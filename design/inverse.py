@@ -51,9 +51,10 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     points: the target: (N, 2) points in m in any orientation (N >= 2; a smooth parametric
         spline through them, parametrised by arc length), a file (`target_io.read_target_file`
         with `select` and `units`: CSV, splined the same way; SVG and DXF curves, taken as
-        drawn), or a `target_io.TargetFile` already read. A target shorter than the shortest
-        unit the map allows at (t, w), or far longer than the longest array, is refused
-        (`targets_scale.check_scale`: the likely unit slip, in mm).
+        drawn), or a `target_io.TargetFile` already read. A target from a file shorter than
+        the shortest unit the map allows at (t, w), or far longer than the longest array, is
+        refused (`targets_scale.check_scale`: the likely unit slip, in mm); points given as
+        numbers get the best design, a warning and ``met = False``.
     tangents: tangent direction at each point, degrees (N,) or vectors (N, 2): the points are
         then control points and the target is the biarcs through them (the paper's S).
     tol: the largest deviation allowed, a fraction of the target's arc length (0 < tol < 1).
@@ -126,7 +127,9 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     lookup = MapLookup(StateMap(raw, state_kw, paper=paper))
     designer = BiarcDesigner(lookup, t, w, min_turn_deg, merge_deg, theta_scale=2.0 if paper else 1.0)
     designer.progress = tick
-    check_points_scale(points, t, w, design_map=raw, L_range=L_range, max_units=max_units)
+    if source is not None:  # a file's length may be a unit slip; raw points keep the old
+        # contract (the best design, a warning and met = False: test_out_of_reach_says_so)
+        check_points_scale(points, t, w, design_map=raw, L_range=L_range, max_units=max_units)
     tick("design")
 
     if tangents is not None:

@@ -25,3 +25,15 @@ def lookup(design_map):
     from snapmorph.design.lookup import MapLookup
 
     return MapLookup(design_map)
+
+
+@pytest.fixture(scope="session")
+def dm():
+    """The committed default design map (its deprecation and provenance warnings hushed)."""
+    import warnings
+
+    from snapmorph.design.lookup import load_map
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return load_map()

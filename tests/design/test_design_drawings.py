@@ -8,15 +8,9 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from snapmorph.design import Unit
 from snapmorph.design.drawings import developed_length, split_pieces, write_drawings
 
-T, W = 0.5e-3, 5e-3
-UNITS = [Unit(L=0.0726, h=0.0069, t=T, w=W, side=1),
-         Unit(L=0.0738, h=0.0113, t=T, w=W, side=1),
-         Unit(L=0.0673, h=0.0, t=T, w=W, side=0),
-         Unit(L=0.1294, h=0.0211, t=T, w=W, side=1),
-         Unit(L=0.1332, h=0.0313, t=T, w=W, side=-1, b=2e-3)]
+from five_units import FIVE as UNITS, T, W
 
 
 @pytest.fixture(scope="module")

@@ -9,16 +9,9 @@ import numpy as np
 import pytest
 
 from snapmorph.design import inverse_design
-from snapmorph.design.lookup import MapLookup, load_map
+from snapmorph.design.lookup import MapLookup
 from snapmorph.design.paper import (TABLE3_S, T, W, conventions, conventions_table, design_S_paper,
                           plot_conventions, s_control_points)
-
-
-@pytest.fixture(scope="module")
-def dm():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return load_map()
 
 
 @pytest.fixture(scope="module")

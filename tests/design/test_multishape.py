@@ -14,20 +14,13 @@ import numpy as np
 import pytest
 
 from snapmorph.design import MultiDesign, chain, inverse_design_multi, read_units_csv
-from snapmorph.design.lookup import MapLookup, load_map
+from snapmorph.design.lookup import MapLookup
 from snapmorph.design.multishape import SPACER_MIN, _check_lengths
 from snapmorph.design.target_sets import describe, target_family, turning_curve
 from snapmorph.design.targets import Target, deviation
 
 T, W = 0.5e-3, 5e-3
 FAMILY = target_family(10)
-
-
-@pytest.fixture(scope="module")
-def dm():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return load_map()
 
 
 @pytest.fixture(scope="module")

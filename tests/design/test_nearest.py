@@ -5,25 +5,17 @@ arrays and targets, and `nearest_state` must find the state a target was made fr
 rigidly and perturbed) for arrays of up to 20 units.
 """
 
-import warnings
 
 import numpy as np
 import pytest
 
 from snapmorph.design import Unit, chain, nearest_state
-from snapmorph.design.lookup import MapLookup, load_map
+from snapmorph.design.lookup import MapLookup
 from snapmorph.design.nearest import (_reference, branch_and_bound, matched_costs,
                                       table_for_units)
 from snapmorph.design.targets import Target, deviation, place_rigid, resample
 
 T, W = 0.5e-3, 5e-3
-
-
-@pytest.fixture(scope="module")
-def dm():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return load_map()
 
 
 def _random_units(rng, n, spacers=0.15):

@@ -1,23 +1,15 @@
 """`morph_plan`: the steps between two snap patterns, their order and shapes (issue 24)."""
 
 import itertools
-import warnings
 
 import numpy as np
 import pytest
 
 from snapmorph.design import Unit, chain, morph_plan
-from snapmorph.design.lookup import MapLookup, load_map
+from snapmorph.design.lookup import MapLookup
 from snapmorph.design.reconfigure import _crosses
 
 T, W = 0.5e-3, 5e-3
-
-
-@pytest.fixture(scope="module")
-def dm():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return load_map()
 
 
 def _units(rng, n):

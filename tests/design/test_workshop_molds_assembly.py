@@ -12,12 +12,7 @@ from snapmorph.design.kerf import signed_area
 from snapmorph.design.molds_stl import mold_mesh, write_stl_molds
 from snapmorph.design.workshop import write_workshop
 
-T, W = 0.5e-3, 5e-3
-FIVE = [Unit(L=0.0726, h=0.0069, t=T, w=W, side=1),
-        Unit(L=0.0738, h=0.0113, t=T, w=W, side=1),
-        Unit(L=0.0673, h=0.0, t=T, w=W, side=0),
-        Unit(L=0.1294, h=0.0211, t=T, w=W, side=1),
-        Unit(L=0.1332, h=0.0313, t=T, w=W, side=-1, b=2e-3)]
+from five_units import FIVE, T, W
 
 
 @pytest.mark.parametrize("u", [u for u in FIVE if not u.is_spacer] +

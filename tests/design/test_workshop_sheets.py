@@ -7,7 +7,6 @@ import ezdxf
 import numpy as np
 import pytest
 
-from snapmorph.design import Unit
 from snapmorph.design.drawing_checks import check_layout, check_paths, part_boxes
 from snapmorph.design.drawings import (BedWarning, Entity, Sheet, arch_sheet, base_sheet,
                                        split_pieces, tab_ends, tab_face, tab_sheet,
@@ -15,12 +14,7 @@ from snapmorph.design.drawings import (BedWarning, Entity, Sheet, arch_sheet, ba
 from snapmorph.design.kerf import compensate, offset_polygon, signed_area
 from snapmorph.design.nesting import nest_parts, oversize, parse_bed, parts_of
 
-T, W = 0.5e-3, 5e-3
-FIVE = [Unit(L=0.0726, h=0.0069, t=T, w=W, side=1),
-        Unit(L=0.0738, h=0.0113, t=T, w=W, side=1),
-        Unit(L=0.0673, h=0.0, t=T, w=W, side=0),
-        Unit(L=0.1294, h=0.0211, t=T, w=W, side=1),
-        Unit(L=0.1332, h=0.0313, t=T, w=W, side=-1, b=2e-3)]
+from five_units import FIVE, T, W
 LONG = FIVE * 3  # 1429 mm of strip
 
 
