@@ -88,8 +88,9 @@ def test_unit_kind_hashes_the_model_source():
 
     names = {rel for rel, _ in source_files(solver_modules(get_spec("unit"), fake.solve))}
     # (solver/unit.py and solver/unit_model.py are units/planar.py and units/geometry.py now,
-    # pipeline/point.py is pipeline/kinds/unit.py, pipeline/schema.py is maps/schema.py)
-    assert {"solver/continuation.py", "units/__init__.py", "units/geometry.py",
+    # pipeline/point.py is pipeline/kinds/unit.py, pipeline/schema.py is maps/schema.py, the
+    # path drivers of solver/continuation.py are solver/mgdc.py and solver/displacement.py)
+    assert {"solver/mgdc.py", "solver/displacement.py", "units/__init__.py", "units/geometry.py",
             "units/planar.py", "pipeline/kinds/unit.py", "maps/schema.py", "pipeline/dataset.py",
             "fake_unit_solver.py"} <= names
     # every module of units/ the planar unit imports is hashed
