@@ -224,31 +224,38 @@ def _changed(h0, h1) -> np.ndarray:
 
 
 def _first_snap(model, path, h0):
-    """(factor, unit, kind) at which the first unit snaps back along ``path``: its first
-    limit point (the unit: the one that moves most past it) or, before it, the first row
-    where a unit changed state; (None, None, "") when neither."""
+    """(factor, unit, kind) at which the first unit snaps back along ``path``: the first row
+    where a unit changed state before the path's first limit point ("state changed"), else
+    that limit point ("limit point"; the unit: the first to change state past it, or the one
+    left furthest from its unloaded state at the path's end -- past a limit the path goes
+    down the unstable branch, where the other units return to theirs); (None, None, "")
+    when neither."""
     rows = [apex_heights(model, P) for P in path.positions]
     lim = path.limit_load_factor
     k_lim = len(rows) if lim is None else int(np.argmax(path.load_factor))
-    for k in range(1, k_lim):
+    for k in range(1, len(rows)):
         flipped = np.flatnonzero(_changed(h0, rows[k]))
         if flipped.size:
-            return float(path.load_factor[k]), int(flipped[0]), "state changed"
+            if k < k_lim:
+                return float(path.load_factor[k]), int(flipped[0]), "state changed"
+            return float(lim), int(flipped[0]), "limit point"
     if lim is None:
         return None, None, ""
-    move = np.nan_to_num(np.abs(rows[-1] - rows[k_lim]), nan=-1.0)
-    return float(lim), int(np.argmax(move)), "limit point"
+    away = np.nan_to_num(np.abs(rows[-1] - h0), nan=-1.0)
+    return float(lim), int(np.argmax(away)), "limit point"
 
 
-def load_array(model, positions, g: float = G, orientation="upright",
+def load_array(model, positions, g: float | None = None, orientation="upright",
                material=None, loads=(), max_factor: float = DEFAULT_MAX_FACTOR) -> LoadedArray:
     """The morphed array ``positions`` (n_nodes, 2) m of ``model`` (`design.arrays`),
-    clamped at its start, under self-weight (``g`` m/s^2, density of ``material``, along
-    ``orientation``) and ``loads`` ([`ArrayLoad`]); module doc. ``max_factor`` (> 1): how
-    far past the loads the first snap-back is looked for (1: not looked for)."""
+    clamped at its start, under self-weight (``g`` m/s^2, default 9.81 with a ``material``
+    and 0 without; the density of ``material``; along ``orientation``) and ``loads``
+    ([`ArrayLoad`]); module doc. ``max_factor`` (>= 1): how far past the loads the first
+    snap-back is looked for (1: not looked for)."""
     t0 = time.perf_counter()
     direction = gravity_direction(orientation)
     mat = resolve_material(material)
+    g = (G if mat is not None else 0.0) if g is None else check_gravity(g)
     loads = check_loads(loads, model.units)
     if not (isinstance(max_factor, (int, float, np.number)) and math.isfinite(max_factor)
             and 1.0 <= max_factor <= 1e6):
