@@ -67,10 +67,11 @@ def verify_design(design: Design, nodes: int | None = None) -> dict:
     out["max_deviation"], out["rms_deviation"] = out["deviations"][design.placement_mode]
     out["failure"] = verification_failure(r.status, out["max_deviation"], design.tol,
                                           design.placement_mode, design.target_length)
-    out["result"], out["interference"] = r, list(r.interference)
-    if out["failure"] is None and r.interference:  # no contact modelled: a clash is a failure
-        out["failure"] = (f"{len(r.interference)} overlap(s) of parts in the simulated states, "
-                          f"first: {r.interference[0]}")
+    overlaps = list(getattr(r, "interference", ()))
+    out["result"], out["interference"] = r, overlaps
+    if out["failure"] is None and overlaps:  # no contact modelled: a clash is a failure
+        out["failure"] = (f"{len(overlaps)} overlap(s) of parts in the simulated states, "
+                          f"first: {overlaps[0]}")
     design.verification = out
     design.verification_failure = out["failure"]
     if design.tol is not None:
