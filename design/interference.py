@@ -23,7 +23,8 @@ __all__ = ["Overlap", "interference", "polyline_gap"]
 class Overlap:
     """Two parts that overlap in a state. state: its '0'/'1' string (" loaded" appended under
     the dead loads); first, second: ("arch" | "base", 0-based unit index); gap: the smallest
-    centreline distance less half the thicknesses' sum (m, < 0); at: (x, z) m, where
+    centreline distance less ``clearance``, half the thicknesses' sum (m, < 0; -clearance
+    where the centrelines cross); at: (x, z) m, where
     (`polyline_gap`)."""
 
     state: str
@@ -31,12 +32,17 @@ class Overlap:
     second: tuple
     gap: float
     at: tuple
+    clearance: float = 0.0
 
     def __str__(self):
         (a, i), (b, j) = self.first, self.second
-        return (f"state {self.state}: the {a} of unit {i + 1} overlaps the {b} of unit "
-                f"{j + 1} by {-self.gap * 1e3:.2f} mm at ({self.at[0] * 1e3:.1f}, "
-                f"{self.at[1] * 1e3:.1f}) mm")
+        where = f"at ({self.at[0] * 1e3:.1f}, {self.at[1] * 1e3:.1f}) mm"
+        if self.gap <= -self.clearance:
+            how = "crosses"
+        else:
+            how = (f"comes within {(self.gap + self.clearance) * 1e3:.3f} mm (less than the "
+                   f"sheets' {self.clearance * 1e3:.2f} mm) of")
+        return f"state {self.state}: the {a} of unit {i + 1} {how} the {b} of unit {j + 1} {where}"
 
 
 def _point_segment(p, a, b):
@@ -114,5 +120,5 @@ def interference(model, positions, state: str) -> list:
             gap, at = polyline_gap(a_, b_)
             if gap < clearance:
                 out.append(Overlap(state, (ka, i), (kb, j), gap - clearance,
-                                   (float(at[0]), float(at[1]))))
+                                   (float(at[0]), float(at[1])), clearance))
     return out

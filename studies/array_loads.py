@@ -14,7 +14,8 @@ datasheet (`solver.materials.PETG`: E 1.80 GPa, 1230 kg/m^3, allowable strain 2.
 Every size is simulated from scratch (snapped unit by unit, then loaded): the actuator's
 glued stem (`units.geometry`, 1/8 in) is a physical part and keeps its size, so the meshes
 of the scaled units are not the scaled meshes.
-Columns: the free end's sag (mm, and over the array length), which units keep their state
+Columns: the free end's sag (mm, and over the array length; "at the snap" where the array
+does not carry its full weight: the sag at the largest load it carries), which units keep their state
 at full weight, the first snap-back (`LoadedArray.limit_factor`: the factor on the weight at
 which a unit snaps back, looked for up to 10; "-" none), that load in N (factor x weight),
 the largest surface strain while snapping (the snap path, any size: strain is scale free)
@@ -32,6 +33,7 @@ from snapmorph.design.array_loads import load_array
 from snapmorph.design.array_study import (all_array_states, paper_three_units, scaled_units,
                                           table3_S_units)
 from snapmorph.design.arrays import simulate_array
+from snapmorph.design.interference import interference
 from snapmorph.solver.materials import PETG
 
 SCALES = (1.0, 3.0, 10.0)
@@ -67,7 +69,9 @@ def loaded_rows(name, units, nodes=None, scales=SCALES, material=PETG,
                              held="all" if not lost else "lost: " + ", ".join(map(str, lost)),
                              limit=ld.limit_factor, limit_unit=ld.limit_unit,
                              limit_load=ld.limit_load, strain_snap=snap,
-                             strain=ld.strain_max, overlaps=len(r.interference),
+                             strain=ld.strain_max, carried=ld.path.status == "ok",
+                             overlaps=[str(o) for o in r.interference + interference(
+                                 r.model, ld.positions, f"{key} loaded")],
                              time=time.perf_counter() - t0))
     return rows
 
@@ -78,10 +82,11 @@ def table(rows) -> str:
              "snapping / at weight (%) | follow_load (s) |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lim = ("-" if r["limit"] is None else f"{r['limit']:.3g} (unit {r['limit_unit'] + 1})")
+        lim = ("-" if r["limit"] is None else f"{r['limit']:.4g} (unit {r['limit_unit'] + 1})")
+        sag = f"{r['sag'] * 1e3:.4g}" + ("" if r["carried"] else " (at the snap)")
         load = "-" if r["limit_load"] is None else f"{r['limit_load']:.3g}"
         lines.append(f"| {r['array']} | {r['scale']:g}x | {r['state']} | {r['weight']:.3g} | "
-                     f"{r['sag'] * 1e3:.3g} | {r['sag'] / r['length']:.3g} | {r['held']} | "
+                     f"{sag} | {r['sag'] / r['length']:.3g} | {r['held']} | "
                      f"{lim} | {load} | {100 * r['strain_snap']:.2f} / "
                      f"{100 * r['strain']:.2f} | {r['time']:.2f} |")
     return "\n".join(lines)
@@ -96,7 +101,10 @@ def main(argv=None):
     print(f"### Upright under PETG self-weight (nodes per unit: {nodes or 101}; "
           f"{time.perf_counter() - t0:.0f} s in all)\n")
     print(table(rows))
-    print(f"\nOverlapping parts in the unloaded states: {sum(r['overlaps'] for r in rows)}.")
+    overlaps = sorted({f"{r['array']} {r['scale']:g}x, {o}" for r in rows for o in r["overlaps"]})
+    print(f"\nOverlapping parts (every state reached, and loaded): {len(overlaps)}")
+    for o in overlaps:
+        print(f"- {o}")
     return rows
 
 

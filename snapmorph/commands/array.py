@@ -327,7 +327,8 @@ def print_loaded(r) -> None:
     dx, dz = ld.sag * 1e3
     print(f"free end sag: {ld.sag_m * 1e3:.3f} mm (dx {dx:+.3f}, dz {dz:+.3f} mm, array frame)")
     h0, h1 = ld.heights
-    print(f"{'unit':>4} {'state':>7} {'apex/h before':>13} {'under load':>10} {'strain %':>8}  where")
+    print(f"{'unit':>4} {'state':>7} {'apex/h before':>13} {'under load':>10} {'strain %':>8}  where"
+          "  (unit: 0-based index; apex/h: apex above its support chord, < 0 snapped)")
     for i, u in enumerate(r.units):
         if u.is_spacer:
             print(f"{i:>4} {'spacer':>7}")
@@ -337,12 +338,15 @@ def print_loaded(r) -> None:
         print(f"{i:>4} {state:>7} {h0[i]:13.3f} {h1[i]:10.3f} {100 * s:8.3f}  {where}")
     if ld.limit_factor is None:
         searched = "not looked for" if ld.max_factor <= 1 else f"none up to factor {ld.max_factor:g}"
-        print(f"limit load: {searched} ({ld.max_factor * ld.total_load:.4g} N)")
+        print(f"limit load: {searched} (no unit snaps back under {ld.max_factor:g} x the "
+              f"loads, {ld.max_factor * ld.total_load:.4g} N)")
     else:
         print(f"limit load: unit index {ld.limit_unit} snaps back first, at load factor "
               f"{ld.limit_factor:.4g} ({ld.limit_load:.4g} N; {ld.limit_kind})")
     snap = max((s.strain_max for s in r.snaps), default=0.0)
     allow = "" if mat is None or not math.isfinite(mat.allowable_strain) else \
         f"; allowable {100 * mat.allowable_strain:.2f} % ({mat.name})"
-    print(f"largest strain: {100 * ld.strain_max:.3f} % under the loads ({ld.strain_where()}), "
+    k = max(range(len(ld.strains)), key=lambda i: ld.strains[i][0])
+    print(f"largest strain: {100 * ld.strain_max:.3f} % under the loads (unit index {k}, "
+          f"{ld.strains[k][1]}), "
           f"{100 * snap:.3f} % while snapping{allow}")

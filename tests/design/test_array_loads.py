@@ -143,11 +143,12 @@ def test_interference():
     m0, m1 = model.meshes
     tied = {a for a, _ in model.ties}
     free = [n for n in m0.arch if int(n) not in tied]
-    P[free, 0] += m1.offset  # unit 1's arch moved over unit 2: it stands on unit 2's base
-    found = interference(model, P, "00")
-    pairs = {(o.first, o.second) for o in found}
-    assert (("base", 1), ("arch", 0)) in pairs or (("arch", 0), ("base", 1)) in pairs
-    assert all(o.gap < 0 for o in found) and "overlaps" in str(found[0])
+    P[free, 0] += m1.offset  # unit 1's arch moved onto unit 2's arch, just above its base
+    found = {(o.first, o.second): o for o in interference(model, P, "00")}
+    assert set(found) == {(("arch", 0), ("base", 1)), (("arch", 0), ("arch", 1))}
+    assert all(o.gap < 0 for o in found.values())
+    assert "crosses the arch of unit 2" in str(found[("arch", 0), ("arch", 1)])
+    assert "comes within" in str(found[("arch", 0), ("base", 1)])
     gap, _ = polyline_gap(np.array([[0, 0], [1, 1.0]]), np.array([[0, 1], [1, 0.0]]))
     assert gap == 0.0
     gap, _ = polyline_gap(np.array([[0, 0], [1, 0.0]]), np.array([[0, 0.3], [1, 0.3]]))
