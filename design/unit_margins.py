@@ -43,15 +43,17 @@ def snap_back(model, held, i: int, steps: int = 20, max_distance: float = 3.0):
     state (iii) ``held`` (n_nodes, 2) m (module doc). status "ok" or why the pull did not
     bring the unit back to state (i) (then F_back is the largest force sampled, or NaN)."""
     from snapmorph.design.arrays import ARRAY_RULES, _frame, _UnitInArray
-    from snapmorph.units.push_through import push_through
+    from snapmorph.units.push_through import first_peak, push_through
 
     m = model.meshes[i]
     Q = np.asarray(held, float)
     P = _frame(Q, Q[m.supports[0]].copy(), Q[m.supports[1]] - Q[m.supports[0]])
-    # the peak refined by displacement-controlled solves (the snap's own F_cr is read off
-    # the samples' parabola, 1e-3 off): F_back is a margin a design is judged by
+    # the first force maximum (none: no snap back within max_distance h), refined by
+    # displacement-controlled solves (the snap's own F_cr is read off the samples'
+    # parabola, 1e-3 off): F_back is a margin a design is judged by
+    rules = replace(ARRAY_RULES, peak=first_peak, refine_peak=True)
     out = push_through(_UnitInArray(model, i, P, steps, max_distance, 1e-4, towards=-1.0),
-                       replace(ARRAY_RULES, refine_peak=True))
+                       rules)
     status = "ok" if out.bistable else f"unit {i + 1}: the pull back: {out.status}"
     return float(out.F_cr), float(out.d_cr), status
 

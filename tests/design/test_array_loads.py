@@ -205,3 +205,29 @@ def test_cli_array_gravity(capsys):
         code = main(["array", "--units", "examples/units_three.csv", "--gravity", *argv])
         err = capsys.readouterr().err
         assert code == 2 and word in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_design_that_does_not_hold_exits_1(tmp_path, capsys):
+    """The M design (committed map) holds upright under PETG, but no unit of it resists a
+    1 N pull back: the snap-back margin fails loudly, exit 1 like a missed tolerance."""
+    from snapmorph.cli import main
+
+    out = tmp_path / "M"
+    code = main(["design", "examples/target_M.csv", "--t", "0.5", "--w", "5", "--out", str(out),
+                 "--no-drawings", "--no-progress", "--material", "petg", "--min-backload", "1"])
+    stdout = capsys.readouterr().out
+    assert code == 1
+    assert "under its own weight (PETG, upright): held" in stdout
+    assert "DOES NOT HOLD" in stdout and "below min_backload 1 N" in stdout
+    assert "VERIFICATION FAILED" in stdout
+    backloads = [float(line.split("snap-back load ")[1].split(" N")[0])
+                 for line in stdout.splitlines() if line.startswith("  unit ")]
+    assert backloads and all(0.01 < f < 1.0 for f in backloads)
+    assert "# VERIFICATION FAILED" in (out / "units.csv").read_text()
+    for argv, word in ((["--max-strain", "2"], "--max-strain"),
+                       (["--orientation", "up"], "--orientation"),
+                       (["--min-backload", "-1"], "--min-backload")):
+        code = main(["design", "examples/target_M.csv", "--t", "0.5", "--w", "5", "--out",
+                     str(out), *argv])
+        err = capsys.readouterr().err
+        assert code == 2 and word in err and len(err.strip().splitlines()) == 1, err
