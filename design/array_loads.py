@@ -319,8 +319,11 @@ def load_array(model, positions, g: float | None = None, orientation="upright",
         where = ("; ".join(f"unit {i + 1}" for i in lost) or "the array")
         lim = ("" if out.limit_factor is None
                else f" (at load factor {out.limit_factor:.4g}, {out.limit_kind})")
-        out.status = (f"lost: {where} does not keep its state under the loads{lim}"
-                      if path.status == "ok" else
-                      f"lost: the array does not carry its loads: {where} snaps back{lim}")
+        if path.status == "ok":
+            out.status = f"lost: {where} does not keep its state under the loads{lim}"
+        elif path.status.startswith("snapped"):
+            out.status = f"lost: {where} snaps back before the loads are full{lim}"
+        else:
+            out.status = f"lost: the array does not carry its loads: {where} snaps back{lim}"
     out.time = time.perf_counter() - t0
     return out

@@ -678,7 +678,8 @@ def simulate_array(units, snapped=None, order=None, nodes: int | None = None,
     the paper's PETG), ``loads`` ([`design.array_loads.ArrayLoad`]: forces in N on a unit's
     apex or end), ``max_factor`` (how far past the loads the first snap-back is looked for,
     default 10): the final state, clamped at its start, is loaded and reported in
-    ``loaded`` (`LoadedArray`: sag, held, limit_factor, strains). E defaults to the
+    ``loaded`` (`LoadedArray`: sag, held, limit_factor, strains; None when the snapping
+    itself failed: ``status`` says why). E defaults to the
     material's, else the paper's 2.2 GPa. Without gravity and loads nothing changes.
     ``interference`` lists overlapping parts in every state reached (`design.interference`).
     Returns an `ArrayResult`; failures come back in ``status`` (the state reached so far).
