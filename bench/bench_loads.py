@@ -9,6 +9,8 @@ per unit, clamped at its start, under the paper's PETG self-weight (rho = 1.3e3 
 in its plane: "horizontal" (a cantilever, gravity across it) and "standing" (clamped at
 its foot, gravity along it: it shortens, then bends over). Its size is the array's; the
 shape is not the morphed one. ``follow_load`` to the full weight, at 1x, 3x and 10x size.
+The S array itself (part B): all snapped, upright under PETG self-weight, ``follow_load``
+from its morphed state to factor 1 and to 10 (`s_array`).
 Run: ``.venv/bin/python bench/bench_loads.py`` (also part of ``make bench``).
 """
 
@@ -99,6 +101,36 @@ def main():
                   f"median {med:.2f} s (best {best:.2f} s; target for the S array <= 5 s), "
                   f"{len(path)} steps, free end moved {move * 1e3:.0f} mm, status "
                   f"{path.status.split(':')[0]}")
+
+    s_array()
+
+
+def s_array(material=None):
+    """The issue's target on the array itself: the Table 3 S (`design.array_study.
+    table3_S_units`: 8 units of (106.7, 25.8) mm and a 100 mm straight, 101 nodes per unit),
+    all snapped (not timed), then held upright under PETG self-weight from its morphed state:
+    `follow_load` to factor 1 (the sag) and to 10 (the search for the first snap-back)."""
+    from snapmorph.design.array_study import table3_S_units
+    from snapmorph.design.arrays import simulate_array
+    from snapmorph.solver.materials import PETG
+
+    material = material or PETG
+    units = table3_S_units()
+    r = simulate_array(units, E=material.E)
+    st = r.model.structure(clamp=True)
+    st.add_gravity(material, direction=(0.0, -1.0))
+    end = int(r.model.base_nodes[-1])
+    for factor in (1.0, 10.0):
+        med, best, path = median_time(lambda: st.follow_load(factor, start=r.positions),
+                                      max(RUNS // 2, 1), warm=True)
+        sag = np.linalg.norm(path.positions[-1][end] - r.positions[end])
+        lim = path.limit_load_factor
+        print(f"Table 3 S array, all snapped ({st.n_nodes} nodes, {r.model.length:.3f} m), "
+              f"upright under {material.name} self-weight, follow_load to factor {factor:g}: "
+              f"median {med:.2f} s (best {best:.2f} s; target <= 5 s), {len(path)} steps, "
+              f"free end moved {sag * 1e3:.1f} mm, limit load factor "
+              f"{'none' if lim is None else f'{lim:.4f}'}, status {path.status.split(':')[0]}")
+
 
 if __name__ == "__main__":
     main()

@@ -35,7 +35,8 @@ from snapmorph.design.units import Unit
 from snapmorph.units.shapes import end_tangent_angle
 
 __all__ = ["ArrayStudy", "all_array_states", "curve_deviation", "fk_released",
-           "paper_three_units", "released_shapes", "run_study", "shape_change", "table3_M_units"]
+           "paper_three_units", "released_shapes", "run_study", "shape_change", "table3_M_units",
+           "table3_S_units", "scaled_units"]
 
 T, W = 0.5e-3, 5e-3
 #: Table 3 of the paper, M: (L, h) mm of the four arched units, the 67.3 mm spacer between
@@ -59,6 +60,30 @@ def table3_M_units(b_over_L: float = 0.0) -> list:
         L, h = L * 1e-3, h * 1e-3
         out.append(Unit(L=L, h=h, t=T, w=W, side=side, b=b_over_L * L if h > 0 else 0.0))
     return out
+
+
+#: Table 3 of the paper, S: eight units of (L, h) = (106.7, 25.8) mm, four on each side of the
+#: base, one arm per side; the paper's S has a straight between its arms, of a length it does
+#: not give: 100 mm, as `design.paper.S_STRAIGHT` (our S target)
+TABLE3_S = (106.7, 25.8)
+TABLE3_S_STRAIGHT = 100.0
+
+
+def table3_S_units(b_over_L: float = 0.0, straight: bool = True) -> list:
+    """The paper's inverse-designed S (Table 3): four units (106.7, 25.8) mm with arches on
+    +z, a 100 mm spacer (``straight``), four with arches on -z; t 0.5, w 5 mm, b = b_over_L L."""
+    L, h = TABLE3_S[0] * 1e-3, TABLE3_S[1] * 1e-3
+    arm = [Unit(L=L, h=h, t=T, w=W, side=s, b=b_over_L * L) for s in (1, -1)]
+    middle = [Unit(L=TABLE3_S_STRAIGHT * 1e-3, h=0.0, t=T, w=W, side=0, b=0.0)] if straight else []
+    return [arm[0]] * 4 + middle + [arm[1]] * 4
+
+
+def scaled_units(units, factor: float) -> list:
+    """``units`` with every length (L, h, t, w, b) times ``factor``: the same shapes, the
+    weight per length ~ factor^2 against EI ~ factor^4, so self-weight counts factor times
+    more (q L^3 / EI ~ factor)."""
+    return [Unit(L=u.L * factor, h=u.h * factor, t=u.t * factor, w=u.w * factor, side=u.side,
+                 b=u.b * factor) for u in units]
 
 
 # ---------------------------------------------------------------------------- comparisons

@@ -51,7 +51,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from snapmorph.design.interference import interference
 from snapmorph.design.kinematics import parse_snapped as parse_state
+from snapmorph.design.strains import path_strain
 from snapmorph.design.units import Unit
 from snapmorph.units import status as statuses
 from snapmorph.units.push_through import Rules, largest_force, push_through
@@ -285,6 +287,10 @@ class SnapRecord:
     steps: int = 0
     time: float = 0.0
     status: str = "ok"
+    #: the largest surface strain of the unit along its push, in state (iii) held and
+    #: released (`design.strains`; dimensionless) and where it sits ("arch, middle", ...)
+    strain_max: float = float("nan")
+    strain_where: str = ""
 
     @property
     def status_code(self) -> int:
@@ -305,7 +311,9 @@ class ArrayResult:
     (0-based); positions: (n_nodes, 2) every node (m); snaps: [SnapRecord]; unit_bases: [(k_i, 2)]
     each unit's base (sharing the junction points); joints: (n+1, 2) unit end points; angles:
     (n+1,) base direction at each joint (rad, from the edges next to it); model: the mesh;
-    time: wall time (s)."""
+    time: wall time (s); interference: [`design.interference.Overlap`] of every state the
+    array went through (each snap's released state, and the loaded one); loaded: the array
+    under its dead loads (`design.array_loads.LoadedArray`; None without gravity or loads)."""
 
     units: list
     state: str
@@ -316,6 +324,8 @@ class ArrayResult:
     snaps: list = field(default_factory=list)
     model: ArrayModel | None = None
     time: float = 0.0
+    interference: list = field(default_factory=list)
+    loaded: object = None
 
     def __repr__(self):
         # the arrays run to tens of kB: a summary a person can read instead
@@ -463,14 +473,15 @@ class _UnitInArray:
     current deformed state (the `solver.Structure` drivers start from the stress-free one),
     the actuator's force summed over the joint; states are node positions (n, 2)."""
 
-    def __init__(self, model: ArrayModel, i, P, steps, max_distance, min_step):
+    def __init__(self, model: ArrayModel, i, P, steps, max_distance, min_step, towards=1.0):
         from snapmorph.solver import ConvergenceError
 
         self.failures = (ConvergenceError,)
         u, m = model.units[i], model.meshes[i]
         self.model, self.i, self.P, self.apex = model, i, P, m.apex
         self.h, self.steps, self.max_distance, self.min_step = u.h, steps, max_distance, min_step
-        self.push_dir = np.array([0.0, -float(u.side)])  # towards the base
+        # towards the base (towards = -1: away from it, the pull back of a snapped unit)
+        self.push_dir = np.array([0.0, -float(u.side) * towards])
         self.joint = np.array(m.joint)
         self.newton = _Newton(model.structure(clamp=False, actuator=i, apex_z=True))
         self.z0 = P[self.joint, 1].copy()
@@ -604,6 +615,8 @@ def snap_unit(model: ArrayModel, positions, i: int, steps: int = 20,
                       "released")
     rec.neighbour_change = _shape_changes(model, Q, Q_new, i)
     rec.neighbour_change_peak = _shape_changes(model, P, out.states["i"], i)
+    rec.strain_max, rec.strain_where = path_strain(
+        model, list(out.path.positions) + [held, Q_new], i)
     rec.time = time.perf_counter() - t0
     return Q_new, rec
 
@@ -642,8 +655,9 @@ def _order(order, snapped, n):
 
 
 def simulate_array(units, snapped=None, order=None, nodes: int | None = None,
-                   E: float = PETG_E, model: ArrayModel | None = None,
-                   start=None, steps: int = 20) -> ArrayResult:
+                   E: float | None = None, model: ArrayModel | None = None,
+                   start=None, steps: int = 20, *, gravity=None, orientation="upright",
+                   material=None, loads=None, max_factor: float | None = None) -> ArrayResult:
     """Simulate the clamped array of ``units`` with the units in ``snapped`` snapped one at a
     time, in ``order``.
 
@@ -655,9 +669,31 @@ def simulate_array(units, snapped=None, order=None, nodes: int | None = None,
     ``start``: an `ArrayResult` of the same units to continue from (its snapped units stay
     snapped; ``snapped`` must include them and ``order`` lists only the new ones); ``steps``:
     the push's first step is h/steps (`snap_unit`).
+
+    Dead loads (issue 23; `design.array_loads`): ``gravity`` (None/False: none, the default;
+    True: g = 9.81 m/s^2; or g), ``orientation`` ("upright": gravity (0, -1) in the array's
+    frame and plane; "sideways": normal to the plane, no in-plane load; or an angle in degrees
+    that turns gravity to (sin a, -cos a)), ``material`` (a `solver.materials.Material` or a
+    preset name, "petg", "pla", "paper": its density; its E when ``E`` is not given; default
+    the paper's PETG), ``loads`` ([`design.array_loads.ArrayLoad`]: forces in N on a unit's
+    apex or end), ``max_factor`` (how far past the loads the first snap-back is looked for,
+    default 10): the final state, clamped at its start, is loaded and reported in
+    ``loaded`` (`LoadedArray`: sag, held, limit_factor, strains; None when the snapping
+    itself failed: ``status`` says why). E defaults to the
+    material's, else the paper's 2.2 GPa. Without gravity and loads nothing changes.
+    ``interference`` lists overlapping parts in every state reached (`design.interference`).
     Returns an `ArrayResult`; failures come back in ``status`` (the state reached so far).
     """
     t0 = time.perf_counter()
+    from snapmorph.design.array_loads import (DEFAULT_MAX_FACTOR, check_gravity, check_loads,
+                                              gravity_direction, load_array, resolve_material)
+
+    g = check_gravity(gravity)
+    mat = resolve_material(material)
+    if g > 0 and mat is None:
+        mat = resolve_material("paper")
+    if E is None:
+        E = mat.E if mat is not None else PETG_E
     if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 2:
         raise ValueError(f"steps must be an integer >= 2 (first push step h/steps); got {steps!r}")
     if model is None and start is not None:
@@ -689,9 +725,16 @@ def simulate_array(units, snapped=None, order=None, nodes: int | None = None,
         Q = start.positions.copy()
         snaps = list(start.snaps)
         history = list(start.order)
+    gravity_direction(orientation)  # bad dead-load input fails before any simulation
+    loads = check_loads(loads, model.units)
     todo = [f and not d for f, d in zip(flags, done)]
     seq = _order(order, todo, n)
     status = "ok" if start is None else start.status
+
+    def key():
+        return "".join("1" if s else "0" for s in done)
+
+    overlaps = list(start.interference) if start is not None else interference(model, Q, key())
     if status == "ok":
         for i in seq:
             Q_new, rec = snap_unit(model, Q, i, steps=steps)
@@ -704,7 +747,16 @@ def simulate_array(units, snapped=None, order=None, nodes: int | None = None,
             Q = Q_new
             done[i] = True
             history.append(i)
+            overlaps += interference(model, Q, key())
     Q = _to_clamp_frame(model, Q)
-    state = "".join("1" if s else "0" for s in done)
-    return ArrayResult(units, state, tuple(history), status, Q[model.base_nodes].copy(), Q,
-                       snaps, model, time.perf_counter() - t0)
+    state = key()
+    out = ArrayResult(units, state, tuple(history), status, Q[model.base_nodes].copy(), Q,
+                      snaps, model, interference=overlaps)
+    if g > 0 or loads:
+        if status == "ok":
+            out.loaded = load_array(model, Q, g=g, orientation=orientation, material=mat,
+                                    loads=loads, max_factor=(DEFAULT_MAX_FACTOR if max_factor
+                                                             is None else max_factor))
+            out.interference += interference(model, out.loaded.positions, state + " loaded")
+    out.time = time.perf_counter() - t0
+    return out

@@ -30,6 +30,7 @@ from snapmorph.design.target_io import TargetFile, target_file_of
 from snapmorph.design.targets import Target, arc_length, check_points
 from snapmorph.design.targets_frame import DrawingFrame
 from snapmorph.design.targets_scale import check_points_scale
+from snapmorph.design.unit_margins import verify_loads
 from snapmorph.design.verification import assess, verify_design
 
 PLACEMENTS = ("best", "clamped")
@@ -45,7 +46,8 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
                    L_range=None, hL_range=None, min_barrier: float = 0.5,
                    state: str = "released", max_units: int = 40,
                    theta_convention: str = "ours", verify: bool = False,
-                   progress=None) -> Design:
+                   progress=None, material=None, orientation=None, max_strain=None,
+                   min_backload=None) -> Design:
     """Design an array whose all-snapped base matches a target within `tol` (SI units).
 
     points: the target: (N, 2) points in m in any orientation (N >= 2; a smooth parametric
@@ -89,6 +91,14 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     plot: a path: also draw target, predicted (and simulated) shapes there.
     progress: None or a callable progress(stage) called with "design", "refine" (once per
         least-squares evaluation), "verify" and "plot" as the work goes on (for a progress bar).
+    material, orientation, max_strain, min_backload: does the design hold? With any of them
+        the designed array is simulated under its own weight (`material`: a Material or
+        "petg", "pla", "paper", default the paper's; `orientation`: "upright" (default),
+        "sideways" or an angle, deg), every unit's strain must stay below `max_strain`
+        (default the material's allowable strain) and its snap-back load above
+        `min_backload` (N), and no parts may overlap (`design.unit_margins.verify_loads`);
+        when not, `met` is False, `verification_failure` and `load_check` say why, and a
+        UserWarning is given.
     """
     import warnings
 
@@ -195,6 +205,7 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
     if verify:
         tick("verify")
         verify_design(design)
+    verify_loads(design, material, orientation, max_strain, min_backload)
     if design.max_deviation > design.tol and theta_convention == "ours":
         warnings.warn(f"tolerance missed: the best design deviates {100 * design.max_deviation:.2f} % "
                       f"of the target length > tol {100 * design.tol:.2f} % ({placement} "

@@ -44,8 +44,10 @@ def verify_design(design: Design, nodes: int | None = None) -> dict:
     snapped in order, actuators removed) and measure its base against the target both ways.
     Returns (and stores as `design.verification`) {"status", "time", "xy" (placed as the design
     says), "deviations": {"best": (max, rms), "clamped": (max, rms)}, "placements": ...,
-    "failure"}. A failed verification (`verification_failure`: the simulation did not end ok,
-    or its deviation misses the design's tol) is never met: `design.met` becomes False and
+    "failure", "result" (the `ArrayResult`), "interference" (its overlapping parts,
+    `design.interference`)}. A failed verification (`verification_failure`: the simulation
+    did not end ok, or its deviation misses the design's tol; or parts of the array overlap
+    in a state it went through) is never met: `design.met` becomes False and
     `design.verification_failure` says why."""
     import time
 
@@ -65,6 +67,11 @@ def verify_design(design: Design, nodes: int | None = None) -> dict:
     out["max_deviation"], out["rms_deviation"] = out["deviations"][design.placement_mode]
     out["failure"] = verification_failure(r.status, out["max_deviation"], design.tol,
                                           design.placement_mode, design.target_length)
+    overlaps = list(getattr(r, "interference", ()))
+    out["result"], out["interference"] = r, overlaps
+    if out["failure"] is None and overlaps:  # no contact modelled: a clash is a failure
+        out["failure"] = (f"{len(overlaps)} overlap(s) of parts in the simulated states, "
+                          f"first: {overlaps[0]}")
     design.verification = out
     design.verification_failure = out["failure"]
     if design.tol is not None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 HELP = "simulate a whole array (one DER model), snapping units one at a time"
 DESCRIPTION = """Simulate an array as one DER model: one end clamped, no gravity; each unit is
@@ -14,6 +15,9 @@ directly simulated single units (source "simulate").
   snapmorph array --units units.csv --all --out DIR      every state, overlay plots, tables
   snapmorph array --paper-three [--out DIR]              the paper's three units, 8 states
   snapmorph array --paper-M [--out DIR]                  the paper's Table 3 M array, 16 states
+  snapmorph array --units units.csv --gravity --orientation upright --material petg
+        [--load 2:apex:0,-0.05]     the morphed array under its weight and loads: sag (mm),
+                                    states held, the load the first unit snaps back at, strain
 
 Lengths in units.csv are millimetres; units.csv has no b column (--b-over-L sets b = b/L L)."""
 
@@ -43,14 +47,16 @@ def add_parser(sub) -> argparse.ArgumentParser:
                    help="with --paper-three: b in mm (default 5 = w, the specimens)")
     p.add_argument("--nodes", type=integer(11, 100000, what="base nodes per unit"), default=None,
                    help="resolution: base nodes per unit (default 161, as snapmorph unit)")
-    p.add_argument("--E", type=number("Pa", 0.0, 1e13, what="Young's modulus"), default=2.2e9,
-                   help="Young's modulus, Pa (default PETG)")
+    p.add_argument("--E", type=number("Pa", 0.0, 1e13, what="Young's modulus"), default=None,
+                   help="Young's modulus, Pa (default the paper's PETG, 2.2e9; with --gravity "
+                        "the --material's)")
     add_shape_options(p, plot="single state: write a figure (PNG/PDF/SVG)",
                       csv="single state: write the base polyline (mm)",
                       overlay="with --units: draw this target (x_mm, y_mm) over the shapes",
                       start="clamp at (0, 0), heading +x")
     p.add_argument("--no-fk", action="store_true",
                    help="skip the comparison with forward kinematics")
+    add_load_options(p)
     p.add_argument("--out", default=None,
                    help="study: folder for study.md, study.json, states.png "
                         "(default build/array/<name>)")
@@ -77,6 +83,9 @@ def _check(args):
         raise CommandError(f"--b must be >= 0 mm; got {args.b}")
     if args.overlay and not args.units:
         raise CommandError("--overlay needs --units")
+    if study and (args.gravity is not None or args.load):
+        raise CommandError("--gravity and --load apply to one snap pattern (--units, not with "
+                           "--all, --paper-three, --paper-M)")
     _check_paths(args, study)
     return study
 
@@ -125,7 +134,8 @@ def run(args) -> int:
         n_arched = sum(not u.is_spacer for u in units)
         print(f"simulating {2 ** n_arched} states of {len(units)} units (a few seconds each) ...",
               flush=True)
-        s = run_study(units, name=name, nodes=args.nodes, E=args.E, fk=not args.no_fk)
+        s = run_study(units, name=name, nodes=args.nodes, E=2.2e9 if args.E is None else args.E,
+                      fk=not args.no_fk)
         print(s.table())
         (out / "study.md").write_text(s.table() + "\n")
         (out / "study.json").write_text(json.dumps(s.summary(), indent=1, default=float) + "\n")
@@ -171,7 +181,11 @@ def _one_state(args) -> int:
             raise CommandError(f"--order {args.order}: {exc} (e.g. --order 2,0)") from None
     print(f"simulating {len(units)} units, snapping {sum(snapped)} of them one at a time ...",
           flush=True)
-    r = simulate_array(units, snapped, order=args.order, nodes=args.nodes, E=args.E)
+    loads = _loads(args, units)
+    dead = {} if args.gravity is None and not loads else dict(
+        gravity=args.gravity, orientation=args.orientation, material=args.material,
+        loads=loads, max_factor=args.max_factor)
+    r = simulate_array(units, snapped, order=args.order, nodes=args.nodes, E=args.E, **dead)
     key = "".join("1" if s else "0" for s in snapped)
     print(f"state {key}: {len(units)} units, snapped in the order "
           f"{', '.join(str(k) for k in r.order) or '-'} (0-based); status {r.status}; "
@@ -182,7 +196,7 @@ def _one_state(args) -> int:
               f"{s.turn_deg:.3f} deg after release, {s.steps} steps, {s.time:.2f} s")
     fk = None
     if not args.no_fk and r.status == "ok":
-        ch = chain(units, snapped, source="simulate", nodes=r.model.nodes, E=args.E)
+        ch = chain(units, snapped, source="simulate", nodes=r.model.nodes, E=r.model.E)
         fk = ch.xy
         length = r.model.length
         print(f"forward kinematics (source simulate): max deviation "
@@ -201,6 +215,10 @@ def _one_state(args) -> int:
         dist = distances_to_polyline(target, base)
         print(f"overlay {args.overlay}: {len(target)} target points, largest distance to the "
               f"simulated base {dist.max() * 1e3:.2f} mm (point {int(dist.argmax()) + 1})")
+    for overlap in r.interference:
+        print(f"OVERLAP: {overlap}")
+    if r.loaded is not None:
+        print_loaded(r)
     if args.csv:
         np.savetxt(args.csv, base * 1e3, delimiter=",", fmt="%.5f", header="x_mm,y_mm",
                    comments="")
@@ -213,4 +231,122 @@ def _one_state(args) -> int:
         figure = plot_result(r, args.plot, fk, title=f"state {key} (1 = snapped); {frame}",
                              placement=placement, target=target)
         print(f"wrote {figure}")
-    return 0 if r.status == "ok" else 1
+    return 0 if r.status == "ok" and (r.loaded is None or r.loaded.holds) else 1
+
+
+# ------------------------------------------------------------------ dead loads (issue 23)
+def add_load_options(p) -> None:
+    """--gravity, --orientation, --material, --load, --max-factor."""
+    from snapmorph.commands._common import number
+
+    p.add_argument("--gravity", nargs="?", const=9.81, default=None,
+                   type=number("m/s^2", 0.0, 1e4, low_inclusive=True, what="g"), metavar="G",
+                   help="load the morphed array with its own weight (G m/s^2, default 9.81), "
+                        "clamped at its start: prints the sag (mm), the states held, the "
+                        "load the first unit snaps back at and the largest strain")
+    p.add_argument("--orientation", default="upright", type=_orientation,
+                   help="upright (gravity in the array's plane, -z of the array frame; "
+                        "default), sideways (normal to it, as the paper's test: no in-plane "
+                        "load) or an angle in degrees, -360 to 360 (gravity turned to "
+                        "(sin a, -cos a): 90 hangs from the clamp, -90 stands on it)")
+    p.add_argument("--material", default=None, type=_material,
+                   help="petg, pla or paper (solver.materials presets: density, E, allowable "
+                        "strain; default paper: E 2.2 GPa, 1300 kg/m^3)")
+    p.add_argument("--load", action="append", default=[], metavar="UNIT:WHERE:FX,FZ",
+                   help="a dead load in N on unit UNIT (0-based index) at its apex or end, "
+                        "in the array frame, e.g. 2:apex:0,-0.05 (repeatable)")
+    p.add_argument("--max-factor", type=number("", 1.0, 1e6, low_inclusive=True,
+                                               what="load factor"), default=10.0,
+                   help="look for the first snap-back up to this factor on the loads "
+                        "(1 <= factor <= 1e6; default %(default)s)")
+
+
+def _orientation(text):
+    import argparse
+
+    if text in ("upright", "sideways"):
+        return text
+    try:
+        a = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be upright, sideways or an angle in degrees (-360 to 360); got {text!r}") from None
+    if not (-360.0 <= a <= 360.0):
+        raise argparse.ArgumentTypeError(
+            f"must be an angle in degrees, -360 to 360 (or upright, sideways); got {text!r}")
+    return a
+
+
+def _material(text):
+    import argparse
+
+    from snapmorph.solver.materials import MATERIALS
+
+    if text.lower() not in MATERIALS:
+        raise argparse.ArgumentTypeError(
+            f"must be one of {', '.join(sorted(MATERIALS))}; got {text!r}")
+    return text.lower()
+
+
+def _loads(args, units) -> list:
+    """[ArrayLoad] from the --load texts; CommandError naming --load and the form."""
+    from snapmorph.cli import CommandError
+    from snapmorph.design.array_loads import ArrayLoad, check_loads
+    out = []
+    form = "UNIT:WHERE:FX,FZ (unit index 0-based, WHERE apex or end, forces in N)"
+    for text in args.load:
+        parts = text.split(":")
+        try:
+            unit, where, force = int(parts[0]), parts[1], [float(v) for v in parts[2].split(",")]
+        except (IndexError, ValueError):
+            raise CommandError(f"--load {text}: must be {form}, e.g. 2:apex:0,-0.05") from None
+        if len(parts) != 3 or len(force) != 2:
+            raise CommandError(f"--load {text}: must be {form}, e.g. 2:apex:0,-0.05")
+        out.append(ArrayLoad(unit, where, tuple(force)))
+    if out:
+        try:
+            check_loads(out, units)
+        except ValueError as exc:
+            raise CommandError(f"--load: {exc}") from None
+    return out
+
+
+def print_loaded(r) -> None:
+    """The loaded array's sag, states, limit load and strains, in mm and N."""
+    ld = r.loaded
+    mat = ld.material
+    what = []
+    if ld.g > 0:
+        what.append(f"its own weight ({mat.name}, {mat.density:g} kg/m^3, g {ld.g:g} m/s^2, "
+                    f"{ld.orientation if isinstance(ld.orientation, str) else f'{ld.orientation:g} deg'})")
+    if ld.loads:
+        what.append(f"{len(ld.loads)} load(s)")
+    print(f"under {' and '.join(what)}: {ld.status}; total dead load {ld.total_load:.4g} N")
+    for note in ld.notes:
+        print(f"note: {note}")
+    dx, dz = ld.sag * 1e3
+    print(f"free end sag: {ld.sag_m * 1e3:.3f} mm (dx {dx:+.3f}, dz {dz:+.3f} mm, array frame)")
+    h0, h1 = ld.heights
+    print(f"{'unit':>4} {'state':>7} {'apex/h before':>13} {'under load':>10} {'strain %':>8}  where"
+          "  (unit: 0-based index; apex/h: apex above its support chord, < 0 snapped)")
+    for i, u in enumerate(r.units):
+        if u.is_spacer:
+            print(f"{i:>4} {'spacer':>7}")
+            continue
+        state = "held" if ld.held[i] else "LOST"
+        s, where = ld.strains[i]
+        print(f"{i:>4} {state:>7} {h0[i]:13.3f} {h1[i]:10.3f} {100 * s:8.3f}  {where}")
+    if ld.limit_factor is None:
+        searched = "not looked for" if ld.max_factor <= 1 else f"none up to factor {ld.max_factor:g}"
+        print(f"limit load: {searched} (no unit snaps back under {ld.max_factor:g} x the "
+              f"loads, {ld.max_factor * ld.total_load:.4g} N)")
+    else:
+        print(f"limit load: unit index {ld.limit_unit} snaps back first, at load factor "
+              f"{ld.limit_factor:.4g} ({ld.limit_load:.4g} N; {ld.limit_kind})")
+    snap = max((s.strain_max for s in r.snaps), default=0.0)
+    allow = "" if mat is None or not math.isfinite(mat.allowable_strain) else \
+        f"; allowable {100 * mat.allowable_strain:.2f} % ({mat.name})"
+    k = max(range(len(ld.strains)), key=lambda i: ld.strains[i][0])
+    print(f"largest strain: {100 * ld.strain_max:.3f} % under the loads (unit index {k}, "
+          f"{ld.strains[k][1]}), "
+          f"{100 * snap:.3f} % while snapping{allow}")

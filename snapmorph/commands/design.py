@@ -89,6 +89,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="layer colours as AutoCAD indices, e.g. CUT=1,ENGRAVE=5,MARKS=3")
     p.add_argument("--no-drawings", action="store_true", help="skip DXF/SVG drawings")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (on stderr)")
+    add_hold_options(p)
     p.set_defaults(run=run)
     return p
 
@@ -140,7 +141,11 @@ def run(args) -> int:
         except ValueError:
             raise CommandError(f"--controls must be comma-separated numbers (mm), "
                                f"got {args.controls!r}") from None
+    hold = hold_options(args)
     if len(args.target) > 1:  # one array, several shapes (issue 24)
+        if hold:
+            raise CommandError("--material, --orientation, --max-strain and --min-backload "
+                               "apply to one target")
         from snapmorph.commands.design_multi import run_multi
 
         return run_multi(args, L_range=L_range, hL_range=hL_range, colours=colours)
@@ -185,9 +190,10 @@ def run(args) -> int:
                            placement=args.placement, L_range=L_range, hL_range=hL_range,
                            min_barrier=args.min_barrier, state=args.unit_state,
                            max_units=args.max_units, theta_convention=args.theta_convention,
-                           verify=not args.no_verify, progress=progress)
+                           verify=not args.no_verify, progress=progress, **hold)
     written, shop_warnings = write_design(d, args, colours)
     print(d.summary())
+    print_hold(d)
     for msg in shop_warnings:
         print(f"warning: {msg}")
     print("wrote " + ", ".join(str(p) for p in written))
@@ -228,3 +234,55 @@ def _colours(text):
             raise CommandError(f"--colours: colour index must be 1-255, got {index}")
         out[name] = index
     return out
+
+
+# ------------------------------------------------------- does the design hold? (issue 23)
+def add_hold_options(p) -> None:
+    """--material, --orientation, --max-strain, --min-backload."""
+    from snapmorph.commands.array import _material, _orientation
+
+    p.add_argument("--material", default=None, type=_material,
+                   help="check that the design holds under its own weight: petg, pla or paper "
+                        "(density and allowable strain; any of these four options turns the "
+                        "check on; exit 1 when it fails)")
+    p.add_argument("--orientation", default=None, type=_orientation,
+                   help="upright (default of the check), sideways or an angle in degrees "
+                        "(-360 to 360): where gravity acts on the designed array")
+    p.add_argument("--max-strain", type=number("", 0.0, 1.0, high_inclusive=False,
+                                               what="largest surface strain allowed, a "
+                                                    "fraction: 0.02 is 2 %"), default=None,
+                   help="largest surface strain of any unit, 0 < strain < 1 (0.02 = 2 %%; "
+                        "default the material's allowable strain)")
+    p.add_argument("--min-backload", type=number("N", 0.0, 1e6, low_inclusive=True,
+                                                 what="smallest snap-back load"), default=None,
+                   help="smallest snap-back load of any unit, N (0 to 1e6)")
+
+
+def hold_options(args) -> dict:
+    """The inverse_design keywords of the hold check ({} when none was given)."""
+    kw = dict(material=args.material, orientation=args.orientation,
+              max_strain=args.max_strain, min_backload=args.min_backload)
+    return {} if all(v is None for v in kw.values()) else kw
+
+
+def print_hold(d) -> None:
+    """The hold check's numbers (mm, N, %), when it ran."""
+    check = getattr(d, "load_check", None)
+    if not check:
+        return
+    ld, mat = check["loaded"], check["material"]
+    if ld is not None:
+        lim = ("none up to factor %g" % ld.max_factor if ld.limit_factor is None else
+               f"unit {ld.limit_unit + 1} snaps back at {ld.limit_factor:.4g} x its weight")
+        print(f"under its own weight ({mat.name}, {check['orientation']}): {ld.status}; free "
+              f"end sag {ld.sag_m * 1e3:.2f} mm; {lim}")
+    for m in check["margins"]:
+        back = "" if m.F_back != m.F_back else f", snap-back load {m.F_back:.4g} N"
+        print(f"  unit {m.unit + 1}: strain {100 * m.strain:.3f} % ({m.where}){back}")
+    print(f"allowable strain {100 * check['allowable_strain']:.2f} %"
+          + ("" if check["min_backload"] is None else
+             f", smallest snap-back load {check['min_backload']:.4g} N"))
+    if check["message"]:
+        print(f"DOES NOT HOLD: {check['message']}")
+    else:
+        print("holds: every unit within its margins, no parts overlap")
