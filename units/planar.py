@@ -40,9 +40,9 @@ from snapmorph.solver.problem import ConvergenceError
 from snapmorph.solver.stability import state_stability
 from snapmorph.solver.states import DisplacementProbe
 from snapmorph.units import status as statuses
-from snapmorph.units.geometry import (DEFAULT_NODES, PETG_E, UnitGeometry, build_unit, check_nodes,
-                                      check_real)
-from snapmorph.units.push_through import Rules, push_through
+from snapmorph.units.geometry import (DEFAULT_NODES, PETG_E, SUPPORT_OFFSET, UnitGeometry,
+                                      build_unit, check_nodes, check_real)
+from snapmorph.units.push_through import Rules, push_through, snap_crossings
 # the one crossing rule of every unit, under the names the tests check
 from snapmorph.units.push_through import (  # noqa: F401
     first_peak as _first_peak,
@@ -279,26 +279,70 @@ class _PlanarPush:
 
     failures = (ConvergenceError,)
 
-    def __init__(self, model, push, distance, deadline):
+    def __init__(self, model, push, distance, deadline, limit=np.inf):
         self.model, self.st = model, model.structure
         self.options, self.distance, self.deadline = push, distance, deadline
+        self.limit = limit  # m, the geometric limit the push may go on to (`push_limit`)
         self.X = self.st.reference_positions
-        self.probe = self.system = None
+        self.probe = self.system = self.counts = None
 
     def push(self, stop):
         st = self.st
         options, late = _push_options(st, self.options, self.deadline)
-        if late is not None:
-            rule = stop
+        mgdc = options["method"] == "mgdc"
+        rule = stop
 
-            def stop(rows):  # the same test, and the deadline
-                return late() or rule(rows)
+        def stop(rows):  # the same test on the force-control counts, and the deadline
+            if late is not None and late():
+                return True
+            return rule({"d": rows["d"], "F": rows["F"],
+                         "neg_force": rows["neg"] if mgdc else None})
         path = st.push(self.model.apex, DOWN, self.distance, stop=stop, **options)
         if path.status.startswith("timeout") or (late is not None and late()):
             raise _Timeout(f"while following the path ({len(path.force)} steps)")
+        self.counts = path.negative_eigenvalues if mgdc else None
+        if path.status == "ok" and _goes_on(path, self.counts):
+            path = self._push_on(path, rule, late)
         self.system = st.reduced_system()  # force control: the actuator unloaded
         self.probe = _DeadlineProbe(st, self.model.apex, DOWN, deadline=self.deadline)
         return path
+
+    def force_counts(self, path):
+        """The samples' negative-eigenvalue counts under force control (MGDC's own), -1 on
+        the displacement-controlled part past 3 h (`_push_on`); None for a
+        displacement-controlled push (the slope rule: d only grows there)."""
+        return self.counts
+
+    def _push_on(self, path, rule, late):
+        """The push ran 3 h with F below zero (or falling) and no state (iii): on by
+        displacement control from its last state to the geometric limit `push_limit` (the
+        stop test sees the whole path). Returns the joined path; its status names the
+        limit when it is reached without state (iii)."""
+        limit = self.limit
+        head = {"d": list(path.displacement), "F": list(path.force),
+                "neg_force": None if self.counts is None else list(self.counts)}
+
+        def stop(rows):
+            if late is not None and late():
+                return True
+            neg = None if head["neg_force"] is None else \
+                head["neg_force"] + [-1] * (len(rows["d"]) - 1)
+            whole = {"d": head["d"] + rows["d"][1:], "F": head["F"] + rows["F"][1:],
+                     "neg_force": neg}
+            return rule(whole) or _turned_up(rows)
+        options, _ = _push_options(self.st, self.options, self.deadline)
+        options = {k: v for k, v in options.items() if k in ("critical", "time_limit")}
+        more = self.st.push(self.model.apex, DOWN, limit, method="displacement", stop=stop,
+                            start=path.positions[-1], steps=self.options["steps"], **options)
+        if more.status.startswith("timeout") or (late is not None and late()):
+            raise _Timeout(f"while following the path past 3 h ({len(more.force)} steps)")
+        status = more.status
+        if status == "ok" and not more.displacement[-1] < limit:
+            status = (f"ok: the apex reached the geometric limit d = {limit:.6g} m "
+                      f"({limit / (self.distance / 3.0):.4g} h = {LIMIT_TEXT})")
+        if self.counts is not None:
+            self.counts = np.concatenate([self.counts, np.full(len(more) - 1, -1)])
+        return _joined(path, more, status)
 
     def states(self, path):
         return path.positions
@@ -321,10 +365,67 @@ class _PlanarPush:
         _check_deadline(self.deadline, stage)
 
 
+#: how `push_limit` bounds the push (quoted in the status of a push that reaches it)
+LIMIT_TEXT = ("h + the arch's arc length from its bond's inner end to the apex + the base's "
+              "length from that end to the roller: the inextensible unit cannot push further")
+
+
+def push_limit(g: UnitGeometry) -> float:
+    """The farthest (m) the apex of an inextensible unit can be pushed towards the base: the
+    bond's inner end B lies within the base's length |x_B - x_roller| of its roller (at
+    z = 0), the apex within the arch's arc length s_BA of B, so d <= h + s_BA + |x_B -
+    x_roller|. A push that passes it must stretch the rods: a push that reaches it without
+    state (iii) has none to find."""
+    x_b = g.bond
+    s_ba = (g.flat_length - x_b) + 0.5 * g.arch_length
+    return g.h + s_ba + abs(x_b - SUPPORT_OFFSET * g.L)
+
+
+def _goes_on(path, counts) -> bool:
+    """Should the push go on past its 3 h? Yes when no state (iii) was passed and, after
+    the force peak, F has fallen below zero or is still falling at the end."""
+    d, F = path.displacement, path.force
+    i_pk, j, k = snap_crossings(d, F, counts)
+    if k is not None or len(F) < 3:
+        return False
+    after = F[(i_pk or 0):]
+    return bool(np.min(after) < 0.0 or (F[-1] < F[-2] and d[-1] > d[-2]))
+
+
+def _turned_up(rows) -> bool:
+    """The push past 3 h may end where F, still above zero, rises again (no snap-through
+    ahead: F did not fall below zero)."""
+    d, F = rows["d"], rows["F"]
+    return len(F) > 2 and min(F) > 0.0 and F[-1] > F[-2] and d[-1] > d[-2]
+
+
+def _joined(path, more, status):
+    """The path ``path`` followed by ``more`` (which starts at its last state), as one."""
+    def cat(a, b):
+        return np.concatenate([np.asarray(a), np.asarray(b)[1:]])
+
+    info = dict(path.info)
+    info["total_iterations"] = (path.info.get("total_iterations", 0)
+                                + more.info.get("total_iterations", 0))
+    info["pushed_on"] = {"from_d": float(path.displacement[-1]), "method": more.method,
+                         "status": more.status}
+    fields = {k: cat(v, more.fields[k]) for k, v in path.fields.items() if k in more.fields}
+    return dataclasses.replace(
+        path, displacement=cat(path.displacement, more.displacement),
+        force=cat(path.force, more.force), positions=cat(path.positions, more.positions),
+        status=status, energy=cat(path.energy, more.energy),
+        iterations=cat(path.iterations, more.iterations),
+        negative_eigenvalues=cat(path.negative_eigenvalues, more.negative_eigenvalues),
+        negative_eigenvalues_displacement=cat(path.negative_eigenvalues_displacement,
+                                              more.negative_eigenvalues_displacement),
+        info=info, critical_points=list(path.critical_points) + list(more.critical_points),
+        fields=fields)
+
+
 def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, deadline=None):
     st = model.structure
     critical = push["critical"]
-    out = push_through(_PlanarPush(model, push, 3.0 * g.h, deadline),
+    out = push_through(_PlanarPush(model, push, 3.0 * g.h, deadline, push_limit(g)),
                        Rules(peak_stability=critical))
     if out.error is not None:  # a zero-force state not found: the simulation failed
         raise out.error
