@@ -42,6 +42,7 @@ from snapmorph.solver.states import DisplacementProbe
 from snapmorph.units import status as statuses
 from snapmorph.units.geometry import (DEFAULT_NODES, PETG_E, SUPPORT_OFFSET, UnitGeometry,
                                       build_unit, check_nodes, check_real)
+from snapmorph.units.metrics import largest_strain, most_negative_force, snap_back, strain_place
 from snapmorph.units.push_through import Rules, push_through, snap_crossings
 # the one crossing rule of every unit, under the names the tests check
 from snapmorph.units.push_through import (  # noqa: F401
@@ -87,9 +88,29 @@ class UnitResult(UnitResultBase):
     energy_barrier: float = NAN
     energy_stored: float = NAN
     bifurcation: bool | None = None
+    #: N: the most negative force on the snap path (after F_cr, up to state (iii)), by
+    #: displacement-controlled solves; NaN when F does not fall below zero
+    F_min: float = NAN
+    #: m: the apex displacement d at F_min
+    d_Fmin: float = NAN
+    #: N (> 0): the snap-back load: the released state (iii) on the rig's rollers, its apex
+    #: pushed back up (+z), the force peak that returns it to (i); NaN when there is no
+    #: released state or no peak
+    F_back: float = NAN
+    #: N/m: the released state (iii)'s tangent stiffness against an apex force,
+    #: 1 / (e^T K^-1 e), on the rollers; NaN when there is no released state
+    stiffness_released: float = NAN
+    #: dimensionless: the largest surface strain |eps| + |kappa - kappa_bar| t / 2 over the
+    #: snap path's states (d = 0 to state (iii)) and its exact states, arch and base
+    strain_max: float = NAN
+    #: dimensionless: the same in the released state (iii); NaN when there is none
+    strain_max_released: float = NAN
+    #: where strain_max sits: "arch" or "base", its part and x / L (`units.metrics.strain_place`)
+    strain_where: str = ""
 
     STATE_KEYS = ("theta_end_deg", "energy_barrier", "energy_stored")
-    MORE_KEYS = ("bifurcation",)
+    MORE_KEYS = ("bifurcation", "F_min", "d_Fmin", "F_back", "stiffness_released",
+                 "strain_max", "strain_max_released", "strain_where")
 
 
 def _check_choice(name, value, choices):
@@ -226,6 +247,10 @@ def _rescale(r: UnitResult, g: UnitGeometry, length: float, force: float) -> Uni
     for name in ("d_cr", "d_unstable", "d_second", "S"):
         setattr(r, name, getattr(r, name) * length)
     r.F_cr *= force
+    r.F_min *= force
+    r.d_Fmin *= length
+    r.F_back *= force
+    r.stiffness_released *= force / length
     r.energy_barrier *= energy
     r.energy_stored *= energy
     d, F = r.curve
@@ -425,8 +450,8 @@ def _joined(path, more, status):
 def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, deadline=None):
     st = model.structure
     critical = push["critical"]
-    out = push_through(_PlanarPush(model, push, 3.0 * g.h, deadline, push_limit(g)),
-                       Rules(peak_stability=critical))
+    pusher = _PlanarPush(model, push, 3.0 * g.h, deadline, push_limit(g))
+    out = push_through(pusher, Rules(peak_stability=critical))
     if out.error is not None:  # a zero-force state not found: the simulation failed
         raise out.error
     path = out.path
@@ -452,6 +477,16 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
         result.bifurcation = any(c.d <= d_snap for c in path.bifurcations)
         if i_pk is not None:
             result.stability["states"]["i"] = out.stability["i"]
+    # the snap path: from d = 0 to the crossing of state (iii) (the whole path without one)
+    end = len(out.curve[1]) - 1 if out.crossings[1] is None else out.crossings[1]
+    result.F_min, result.d_Fmin = most_negative_force(
+        pusher.probe, *out.curve, path.positions, i_pk, end, _PlanarPush.failures)
+    rods = {"arch": arch, "base": base}
+    X = st.reference_positions
+    states = [*path.positions[:end + 1], *out.states.values()]
+    where = max((largest_strain(p, X, rods, g.t) for p in states), key=lambda s: s[0])
+    result.strain_max = where[0]
+    result.strain_where = strain_place(where[1], X[rods[where[1]][where[2]], 0], g.L)
     if "iii" not in out.states:  # no second state: monostable, or the path failed
         result.status, result.reason = out.status, out.reason
         return result
@@ -487,7 +522,28 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
                 "theta_end_deg": chord_angle(rb),
                 "arch": released[arch].copy(),
             }
+            result.strain_max_released = largest_strain(released, X, rods, g.t)[0]
+            _check_deadline(deadline, "before the snap-back push")
+            _snap_back(result, g, nodes, tie, tie_stiffness, released, push["steps"],
+                       deadline)
     return result
+
+
+def _snap_back(result, g, nodes, tie, tie_stiffness, released, steps, deadline):
+    """F_back and stiffness_released of a bistable, self-standing result (`units.metrics.
+    snap_back`): the unit without its actuator on the rollers, its base middle held in x."""
+    back = build_unit(g, nodes=nodes, tie=tie, tie_stiffness=tie_stiffness, actuator=False)
+    back.structure.fix(back.base_mid, "x")
+    options = {} if deadline is None else {"time_limit": max(deadline - time.perf_counter(),
+                                                             1e-3)}
+    try:
+        F_back, _, k, path = snap_back(back, released, 3.0 * g.h, steps, options,
+                                       _PlanarPush.failures)
+    except ConvergenceError:
+        return
+    if path.status.startswith("timeout"):
+        raise _Timeout("while pushing the released unit back")
+    result.F_back, result.stiffness_released = F_back, k
 
 
 def _state_stability(st, model, positions, system):

@@ -347,7 +347,8 @@ class PushOutcome:
     states / full_states: "i", "ii", "iii" -> positions / full state vectors; peak: the
     path sample of F_cr; exact_states: (ii), (iii) solved as equilibria (not interpolated);
     stability: "i", "ii", "iii" -> `solver.stability.StateStability` (None: singular);
-    error: the failure of a state that was not found (None)."""
+    error: the failure of a state that was not found (None); crossings: the samples of the
+    crossings of (ii) and (iii)."""
 
     status: str
     path_status: str = ""
@@ -365,6 +366,8 @@ class PushOutcome:
     stability: dict = field(default_factory=dict)
     peak: int | None = None
     error: Exception | None = None
+    #: (j, k): the curve samples that end the zero crossings of (ii) and (iii) (None: none)
+    crossings: tuple = (None, None)
 
 
 def push_through(model, rules: Rules = Rules()) -> PushOutcome:
@@ -388,6 +391,7 @@ def push_through(model, rules: Rules = Rules()) -> PushOutcome:
             neg = None if neg is None else refined[4]
             out.curve = (d.copy(), F.copy())
             _, j, k = snap_crossings(d, F, neg)
+    out.crossings = (j, k)
     i_pk = out.peak = rules.peak(F)
     if i_pk is not None:
         if rules.refine_peak:
