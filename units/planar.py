@@ -328,9 +328,54 @@ class _PlanarPush:
         self.counts = path.negative_eigenvalues if mgdc else None
         if path.status == "ok" and _goes_on(path, self.counts):
             path = self._push_on(path, rule, late)
+        elif mgdc and path.status != "ok":
+            path = self._as_a_rig(path, rule, late)
         self.system = st.reduced_system()  # force control: the actuator unloaded
         self.probe = _DeadlineProbe(st, self.model.apex, DOWN, deadline=self.deadline)
         return path
+
+    def _as_a_rig(self, path, rule, late):
+        """MGDC stopped before its distance (a step cap, a path that wanders or turns back
+        at a snap-back, a step-size underflow): the push again as a displacement-controlled
+        rig makes it, from d = 0 to the geometric limit `push_limit` (it jumps where the
+        rig's unit jumps, and passes regular points MGDC's steps failed at). Its path is
+        taken when it ran its course or passed a state (iii); else MGDC's stands (its
+        failure is the status)."""
+        options, _ = _push_options(self.st, self.options, self.deadline)
+        options = dict(options, method="displacement")
+
+        def stop(rows):
+            if late is not None and late():
+                return True
+            return rule({"d": rows["d"], "F": rows["F"], "neg_force": None})
+        rig = self.st.push(self.model.apex, DOWN, self.limit, stop=stop, **options)
+        if rig.status.startswith("timeout") or (late is not None and late()):
+            raise _Timeout(f"while following the path as a rig ({len(rig.force)} steps)")
+        j = snap_crossings(path.displacement, path.force, self.counts)[1]
+        counts = None  # displacement control: d only grows, the slope rule holds
+        if j is not None:
+            # (ii) on MGDC's path, which follows the unstable branch a rig cannot; the rig's
+            # path beyond the deepest d MGDC reached (where the rig jumps on) after it
+            deepest = float(np.max(path.displacement[:j + 1]))
+            beyond = np.flatnonzero(rig.displacement > deepest)
+            if len(beyond):
+                rig = _joined(_head(path, j + 1), _head(rig, None, beyond[0] - 1), rig.status)
+                counts = np.concatenate([self.counts[:j + 1],
+                                         np.full(len(rig) - j - 1, -1)])
+        found = snap_crossings(rig.displacement, rig.force, counts)[2] is not None
+        if not (found or rig.status == "ok"):
+            return path
+        self.counts = counts
+        status = rig.status
+        if status == "ok" and not found:
+            status = self._limit_status()
+        rig.info["mgdc_status"] = path.status
+        return dataclasses.replace(rig, status=status)
+
+    def _limit_status(self):
+        limit = self.limit
+        return (f"ok: the apex reached the geometric limit d = {limit:.6g} m "
+                f"({limit / (self.distance / 3.0):.4g} h = {LIMIT_TEXT})")
 
     def force_counts(self, path):
         """The samples' negative-eigenvalue counts under force control (MGDC's own), -1 on
@@ -363,8 +408,7 @@ class _PlanarPush:
             raise _Timeout(f"while following the path past 3 h ({len(more.force)} steps)")
         status = more.status
         if status == "ok" and not more.displacement[-1] < limit:
-            status = (f"ok: the apex reached the geometric limit d = {limit:.6g} m "
-                      f"({limit / (self.distance / 3.0):.4g} h = {LIMIT_TEXT})")
+            status = self._limit_status()
         if self.counts is not None:
             self.counts = np.concatenate([self.counts, np.full(len(more) - 1, -1)])
         return _joined(path, more, status)
@@ -422,6 +466,20 @@ def _turned_up(rows) -> bool:
     ahead: F did not fall below zero)."""
     d, F = rows["d"], rows["F"]
     return len(F) > 2 and min(F) > 0.0 and F[-1] > F[-2] and d[-1] > d[-2]
+
+
+def _head(path, stop, start=0):
+    """Rows [start, stop) of a path (its critical points in that range of d kept)."""
+    rows = slice(start, stop)
+    d = path.displacement[rows]
+    lo, hi = float(np.min(d)), float(np.max(d))
+    return dataclasses.replace(
+        path, displacement=d, force=path.force[rows], positions=path.positions[rows],
+        energy=path.energy[rows], iterations=path.iterations[rows],
+        negative_eigenvalues=path.negative_eigenvalues[rows],
+        negative_eigenvalues_displacement=path.negative_eigenvalues_displacement[rows],
+        critical_points=[c for c in path.critical_points if lo <= c.d <= hi],
+        fields={k: v[rows] for k, v in path.fields.items()})
 
 
 def _joined(path, more, status):
