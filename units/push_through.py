@@ -154,7 +154,7 @@ def second_state_passed(rows) -> bool:
     """The push's stop test: the path has passed a candidate (iii) (`snap_crossings`, with
     the rows' force-control counts ``rows["neg_force"]`` when the model gives them)."""
     F = rows["F"]
-    if len(F) < 3:
+    if len(F) < 3 or not min(F) < 0.0:  # (ii) and (iii) need F below zero (cheap first)
         return False
     return snap_crossings(rows["d"], F, rows.get("neg_force"))[2] is not None
 
