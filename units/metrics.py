@@ -19,45 +19,49 @@ UP = (0.0, 1.0)  # the snap-back push: from the other side, away from the base
 
 # ---------------------------------------------------------------------------- strain
 def surface_strain(P, X, t):
-    """(n,) the largest surface strain of a planar rod at each node: |eps| + |kappa -
+    """(..., n) the largest surface strain of a planar rod at each node: |eps| + |kappa -
     kappa_bar| t / 2, with eps the axial strain (the mean of the node's edges'), kappa the
     DER curvature 2 tan(phi / 2) / l (phi the turning angle at the node, l its Voronoi
-    length in the stress-free rod) and kappa_bar its stress-free value. ``P``, ``X``: (n, 2)
-    deformed and stress-free node positions (m) along the rod; ``t``: thickness (m). The two
-    faces carry eps +- dkappa t / 2; the larger magnitude is this sum. End nodes: eps only."""
+    length in the stress-free rod) and kappa_bar its stress-free value. ``P``: (..., n, 2)
+    deformed node positions along the rod (several states at once), ``X``: (n, 2)
+    stress-free ones (m); ``t``: thickness (m). The two faces carry eps +- dkappa t / 2; the
+    larger magnitude is this sum. End nodes: eps only."""
     P, X = np.asarray(P, float), np.asarray(X, float)
-    e, e0 = np.diff(P, axis=0), np.diff(X, axis=0)
-    ell, ell0 = np.hypot(*e.T), np.hypot(*e0.T)
+    e, e0 = np.diff(P, axis=-2), np.diff(X, axis=-2)
+    ell, ell0 = np.hypot(e[..., 0], e[..., 1]), np.hypot(e0[:, 0], e0[:, 1])
     eps_edge = ell / ell0 - 1.0
-    eps = np.empty(len(P))
-    eps[0], eps[-1] = eps_edge[0], eps_edge[-1]
-    eps[1:-1] = 0.5 * (eps_edge[:-1] + eps_edge[1:])
-    bend = np.zeros(len(P))
-    if len(P) > 2:
+    eps = np.empty(P.shape[:-1])
+    eps[..., 0], eps[..., -1] = eps_edge[..., 0], eps_edge[..., -1]
+    eps[..., 1:-1] = 0.5 * (eps_edge[..., :-1] + eps_edge[..., 1:])
+    bend = np.zeros(P.shape[:-1])
+    if P.shape[-2] > 2:
         voronoi = 0.5 * (ell0[:-1] + ell0[1:])
-        bend[1:-1] = np.abs(_curvature(e) - _curvature(e0)) / voronoi * (0.5 * t)
+        bend[..., 1:-1] = np.abs(_curvature(e, ell) - _curvature(e0, ell0)) / voronoi * (0.5 * t)
     return np.abs(eps) + bend
 
 
-def _curvature(e):
-    """Integrated DER curvature 2 tan(phi / 2) at the interior nodes of edges ``e`` (signed,
-    phi the turning angle from one edge to the next)."""
-    a, b = e[:-1], e[1:]
-    cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    dot = np.sum(a * b, axis=1)
+def _curvature(e, ell):
+    """Integrated DER curvature 2 tan(phi / 2) at the interior nodes of edges ``e`` (..., m,
+    2) of lengths ``ell`` (signed, phi the turning angle from one edge to the next)."""
+    a, b = e[..., :-1, :], e[..., 1:, :]
+    cross = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    dot = a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
     # tan(phi / 2) = sin(phi) / (1 + cos(phi)) = cross / (|a||b| + dot)
-    return 2.0 * cross / (np.hypot(*a.T) * np.hypot(*b.T) + dot)
+    return 2.0 * cross / (ell[..., :-1] * ell[..., 1:] + dot)
 
 
 def largest_strain(positions, X, rods, t):
-    """(strain, rod name, node index into the rod) of the largest surface strain of a state
-    (`surface_strain`); ``rods``: {name: node indices along the rod}."""
-    best = (-1.0, "", 0)
+    """(strain, rod name, node index into the rod, state index) of the largest surface
+    strain (`surface_strain`) of the states ``positions`` ((K, n_nodes, 2), or one state
+    (n_nodes, 2): state index 0); ``rods``: {name: node indices along the rod}."""
+    P = np.asarray(positions, float)
+    P = P[None] if P.ndim == 2 else P
+    best = (-1.0, "", 0, 0)
     for name, nodes in rods.items():
-        s = surface_strain(positions[nodes], X[nodes], t)
-        k = int(np.argmax(s))
-        if s[k] > best[0]:
-            best = (float(s[k]), name, k)
+        s = surface_strain(P[:, nodes], X[nodes], t)
+        state, k = np.unravel_index(int(np.argmax(s)), s.shape)
+        if s[state, k] > best[0]:
+            best = (float(s[state, k]), name, int(k), int(state))
     return best
 
 

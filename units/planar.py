@@ -541,8 +541,9 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
         pusher.probe, *out.curve, path.positions, i_pk, end, _PlanarPush.failures)
     rods = {"arch": arch, "base": base}
     X = st.reference_positions
-    states = [*path.positions[:end + 1], *out.states.values()]
-    where = max((largest_strain(p, X, rods, g.t) for p in states), key=lambda s: s[0])
+    states = np.concatenate([path.positions[:end + 1], [*out.states.values()]]) \
+        if out.states else path.positions[:end + 1]
+    where = largest_strain(states, X, rods, g.t)
     result.strain_max = where[0]
     result.strain_where = strain_place(where[1], X[rods[where[1]][where[2]], 0], g.L)
     if "iii" not in out.states:  # no second state: monostable, or the path failed
