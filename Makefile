@@ -17,9 +17,11 @@ $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -e ".[dev]"
+	$(PY) -m snapmorph.units.warmup
+	$(PY) -m snapmorph unit --L 100 --h 20 --t 0.5 --w 5 --b 5 > /dev/null
 	@touch $(STAMP)
 
-venv: $(STAMP)  ## create .venv and install the project (done automatically by every target)
+venv: $(STAMP)  ## create .venv, install the project and warm numba's cache (done automatically by every target)
 
 test: $(STAMP)  ## run the whole test suite (slow tests included)
 	$(PY) -m pytest -q --durations=15

@@ -51,18 +51,24 @@ def _curvature(e, ell):
 
 
 def largest_strain(positions, X, rods, t):
-    """(strain, rod name, node index into the rod, state index) of the largest surface
-    strain (`surface_strain`) of the states ``positions`` ((K, n_nodes, 2), or one state
-    (n_nodes, 2): state index 0); ``rods``: {name: node indices along the rod}."""
+    """(strain, rod name, node index into the rod, state index, per-state maxima (K,)) of
+    the largest surface strain (`surface_strain`) of the states ``positions`` ((K, n_nodes,
+    2), or one state (n_nodes, 2)); ``rods``: {name: node indices along the rod}. Of nodes
+    within 1e-9 of the largest (mirror images in a symmetric state) the one with the
+    smallest stress-free x is named, so that round-off does not pick the side."""
     P = np.asarray(positions, float)
     P = P[None] if P.ndim == 2 else P
-    best = (-1.0, "", 0, 0)
-    for name, nodes in rods.items():
-        s = surface_strain(P[:, nodes], X[nodes], t)
-        state, k = np.unravel_index(int(np.argmax(s)), s.shape)
-        if s[state, k] > best[0]:
-            best = (float(s[state, k]), name, int(k), int(state))
-    return best
+    per_rod = {name: surface_strain(P[:, nodes], X[nodes], t) for name, nodes in rods.items()}
+    series = np.max([s.max(axis=1) for s in per_rod.values()], axis=0)
+    state = int(np.argmax(series))
+    top = float(series[state])
+    best = None
+    for name, s in per_rod.items():
+        for k in np.flatnonzero(s[state] >= top * (1.0 - 1e-9)):
+            x = float(X[rods[name][k], 0])
+            if best is None or x < best[0]:
+                best = (x, name, int(k))
+    return top, best[1], best[2], state, series
 
 
 def strain_place(rod, x, L) -> str:

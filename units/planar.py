@@ -43,7 +43,7 @@ from snapmorph.units import status as statuses
 from snapmorph.units.geometry import (DEFAULT_NODES, PETG_E, SUPPORT_OFFSET, UnitGeometry,
                                       build_unit, check_nodes, check_real)
 from snapmorph.units.metrics import largest_strain, most_negative_force, snap_back, strain_place
-from snapmorph.units.push_through import Rules, push_through, snap_crossings
+from snapmorph.units.push_through import Rules, parabola_peak, push_through, snap_crossings
 # the one crossing rule of every unit, under the names the tests check
 from snapmorph.units.push_through import (  # noqa: F401
     first_peak as _first_peak,
@@ -62,6 +62,12 @@ L_INTERNAL = 0.1  # m
 E_INTERNAL = PETG_E  # Pa
 DOWN = (0.0, -1.0)  # the apex is pushed towards the base
 METHODS = ("mgdc", "displacement")
+#: the default ``steps`` of an MGDC push: its steps adapt to the path (up to 8 x the first);
+#: F_cr and F_min come from displacement-controlled searches and S, theta from the exact
+#: state (iii), so a coarser path moves them by ~1e-9 (F) and ~1e-12 (S, theta) against 60
+MGDC_STEPS = 20
+#: the default ``steps`` of a displacement-controlled push (its steps are where it samples)
+RIG_STEPS = 60
 TIES = ("exact", "spring")
 BRANCHES = ("follow", "primary")
 
@@ -144,7 +150,7 @@ def simulate_unit(
     tie: str = "exact",
     tie_stiffness: float | None = None,
     check_self_standing: bool = True,
-    steps: int = 60,
+    steps: int | None = None,
     branch: str = "follow",
     critical: bool = True,
     time_limit: float | None = None,
@@ -154,7 +160,8 @@ def simulate_unit(
     ``nodes``: resolution (about the number of base nodes; None = the converged default);
     ``method``: "mgdc" (load control, the paper's) or "displacement";
     ``tie``: "exact" or "spring" bonds (``tie_stiffness`` N/m, None = 1e3 x the stiffest
-    adjacent edge); ``steps``: first-step size as a fraction of 3 h;
+    adjacent edge); ``steps``: first-step size as a fraction of 3 h (None: `MGDC_STEPS`
+    for "mgdc", `RIG_STEPS` for "displacement");
     ``branch``: at a bifurcation "follow" the branch the unit takes (default) or stay on the
     "primary" (symmetric) path; ``critical``: detect critical points and report stability
     (False: the bare path, no ``bifurcation`` flag and no per-state stability; state (iii)'s
@@ -178,7 +185,8 @@ def simulate_unit(
     _check_choice("branch", branch, BRANCHES)
     check_self_standing = check_flag("check_self_standing", check_self_standing)
     critical = check_flag("critical", critical)
-    check_steps(steps)
+    steps = (MGDC_STEPS if method == "mgdc" else RIG_STEPS) if steps is None else \
+        check_steps(steps)
     if tie_stiffness is not None:
         tie_stiffness = check_real("tie_stiffness", tie_stiffness, "N/m", "bond spring stiffness")
         if tie_stiffness <= 0:
@@ -342,7 +350,7 @@ class _PlanarPush:
         taken when it ran its course or passed a state (iii); else MGDC's stands (its
         failure is the status)."""
         options, _ = _push_options(self.st, self.options, self.deadline)
-        options = dict(options, method="displacement")
+        options = dict(options, method="displacement", steps=max(options["steps"], RIG_STEPS))
 
         def stop(rows):
             if late is not None and late():
@@ -403,7 +411,8 @@ class _PlanarPush:
         options, _ = _push_options(self.st, self.options, self.deadline)
         options = {k: v for k, v in options.items() if k in ("critical", "time_limit")}
         more = self.st.push(self.model.apex, DOWN, limit, method="displacement", stop=stop,
-                            start=path.positions[-1], steps=self.options["steps"], **options)
+                            start=path.positions[-1],
+                            steps=max(self.options["steps"], RIG_STEPS), **options)
         if more.status.startswith("timeout") or (late is not None and late()):
             raise _Timeout(f"while following the path past 3 h ({len(more.force)} steps)")
         status = more.status
@@ -543,9 +552,12 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
     X = st.reference_positions
     states = np.concatenate([path.positions[:end + 1], [*out.states.values()]]) \
         if out.states else path.positions[:end + 1]
-    where = largest_strain(states, X, rods, g.t)
-    result.strain_max = where[0]
-    result.strain_where = strain_place(where[1], X[rods[where[1]][where[2]], 0], g.L)
+    top, rod, node, k, series = largest_strain(states, X, rods, g.t)
+    result.strain_max = top
+    if k <= end:  # on the path: between samples, the vertex of the parabola through three
+        d = out.curve[0]
+        result.strain_max = max(top, parabola_peak(d[:end + 1], series[:end + 1], k)[0])
+    result.strain_where = strain_place(rod, X[rods[rod][node], 0], g.L)
     if "iii" not in out.states:  # no second state: monostable, or the path failed
         result.status, result.reason = out.status, out.reason
         return result
@@ -596,8 +608,10 @@ def _snap_back(result, g, nodes, tie, tie_stiffness, released, steps, deadline):
     options = {} if deadline is None else {"time_limit": max(deadline - time.perf_counter(),
                                                              1e-3)}
     try:
-        F_back, _, k, path = snap_back(back, released, 3.0 * g.h, steps, options,
-                                       _PlanarPush.failures)
+        # a third of the push's steps: the peak is located by displacement-controlled
+        # solves, not read off the samples (F_back moves by ~1e-10 relative against 60)
+        F_back, _, k, path = snap_back(back, released, 3.0 * g.h, max(1, steps // 3),
+                                       options, _PlanarPush.failures)
     except ConvergenceError:
         return
     if path.status.startswith("timeout"):
