@@ -105,10 +105,11 @@ class _Negated:
         self.probe.last_state = q
 
 
-def most_negative_force(probe, d, F, Q, i_pk, end, failures):
+def most_negative_force(probe, d, F, Q, i_pk, end, failures, tol=2e-3):
     """(F_min N, d_Fmin m) of the snap path: the most negative F of the samples after the
     peak ``i_pk`` up to sample ``end`` (inclusive), refined by displacement-controlled
-    solves where the path is monotone in d around it (`push_through.refine_peak` on -F);
+    solves where the path is monotone in d around it (`push_through.refine_peak` on -F,
+    ``tol`` its bracket as a fraction of the samples' spacing);
     (NaN, NaN) when F does not fall below zero there."""
     from snapmorph.units.push_through import refine_peak
 
@@ -121,7 +122,7 @@ def most_negative_force(probe, d, F, Q, i_pk, end, failures):
     if 0 < m < len(F) - 1:
         neg_F = -np.asarray(F, float)
         F_max, d_max, _ = refine_peak(None if probe is None else _Negated(probe), d, neg_F,
-                                      Q, m, failures)
+                                      Q, m, failures, tol)
         return -F_max, d_max
     return float(F[m]), float(d[m])
 

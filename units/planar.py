@@ -68,6 +68,8 @@ METHODS = ("mgdc", "displacement")
 MGDC_STEPS = 20
 #: the default ``steps`` of a displacement-controlled push (its steps are where it samples)
 RIG_STEPS = 60
+#: the peak searches' bracket (F_cr, F_min), a fraction of the path's spacing at 60 steps
+PEAK_TOL = 2e-3
 TIES = ("exact", "spring")
 BRANCHES = ("follow", "primary")
 
@@ -518,7 +520,9 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
     st = model.structure
     critical = push["critical"]
     pusher = _PlanarPush(model, push, 3.0 * g.h, deadline, push_limit(g))
-    out = push_through(pusher, Rules(peak_stability=critical))
+    # the peak search as fine in d as with 60 steps, whatever the path's spacing
+    tol = PEAK_TOL * push["steps"] / RIG_STEPS
+    out = push_through(pusher, Rules(peak_stability=critical, peak_tol=tol))
     if out.error is not None:  # a zero-force state not found: the simulation failed
         raise out.error
     path = out.path
@@ -547,7 +551,7 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
     # the snap path: from d = 0 to the crossing of state (iii) (the whole path without one)
     end = len(out.curve[1]) - 1 if out.crossings[1] is None else out.crossings[1]
     result.F_min, result.d_Fmin = most_negative_force(
-        pusher.probe, *out.curve, path.positions, i_pk, end, _PlanarPush.failures)
+        pusher.probe, *out.curve, path.positions, i_pk, end, _PlanarPush.failures, tol)
     rods = {"arch": arch, "base": base}
     X = st.reference_positions
     states = np.concatenate([path.positions[:end + 1], [*out.states.values()]]) \

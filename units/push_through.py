@@ -328,7 +328,8 @@ class Rules:
     refine_dips: look for a shallow dip below zero the steps strode over (`refine_dips`);
     unstable_state: solve state (ii); exact: the states that must be found as equilibria
     (one that is not ends the experiment: "not converged"); stability: check (ii) and (iii)
-    (else (iii) found is the answer)."""
+    (else (iii) found is the answer); peak_tol: the peak search's bracket, a fraction of the
+    samples' spacing."""
 
     stop: Callable = second_state_passed
     peak: Callable = first_peak
@@ -338,6 +339,8 @@ class Rules:
     unstable_state: bool = True
     exact: tuple = ("ii", "iii")
     stability: bool = True
+    #: the peak search's tolerance, a fraction of the samples' spacing (`refine_peak`)
+    peak_tol: float = 2e-3
 
 
 @dataclass
@@ -395,7 +398,8 @@ def push_through(model, rules: Rules = Rules()) -> PushOutcome:
     i_pk = out.peak = rules.peak(F)
     if i_pk is not None:
         if rules.refine_peak:
-            out.F_cr, out.d_cr, exact = refine_peak(probe, d, F, Q, i_pk, model.failures)
+            out.F_cr, out.d_cr, exact = refine_peak(probe, d, F, Q, i_pk, model.failures,
+                                                    rules.peak_tol)
         else:
             (out.F_cr, out.d_cr), exact = parabola_peak(d, F, i_pk), False
         out.states["i"], out.full_states["i"] = np.asarray(P[i_pk]).copy(), Q[i_pk].copy()
