@@ -15,6 +15,9 @@ from snapmorph.units import UnitGeometry, simulate_unit
 from snapmorph.units.geometry import build_unit
 from snapmorph.units.metrics import UP, on_rollers, strain_place, surface_strain
 
+#: relative accuracy of a solved force: Newton's residual tolerance (1e-9 of the force
+#: scale EI/L^2) with room for the two solves compared
+FORCE_TOL = 1e-8
 #: off the maps' grids (h/L 0.237, t/L 0.0061, w/L 0.043, b/L 0.021)
 OFF_GRID = dict(L=0.1, h=0.0237, t=0.61e-3, w=4.3e-3, b=2.1e-3)
 
@@ -57,8 +60,9 @@ def test_F_min_against_a_displacement_controlled_path(geometry):
     rig = simulate_unit(g, method="displacement", steps=400, check_self_standing=False)
     d, F = rig.curve
     i = int(np.argmin(F))
-    # the rig's finest sample lies above the minimum, by at most F'' (spacing)^2 / 8
-    assert r.F_min <= F[i] + 1e-12 * abs(F[i])
+    # the rig's finest sample lies above the minimum (by at most F'' (spacing)^2 / 8), up to
+    # the forces' own accuracy: Newton stops at residuals of 1e-9 of the force scale
+    assert r.F_min <= F[i] + FORCE_TOL * abs(F[i])
     assert r.F_min == pytest.approx(F[i], rel=2e-4)
     assert r.d_Fmin == pytest.approx(d[i], abs=2.0 * (d[i + 1] - d[i - 1]))
 
@@ -87,7 +91,7 @@ def test_F_back_against_a_direct_push_of_the_released_unit(off_grid):
                                start=start, steps=300, critical=False, stop=past_peak)
     i = int(np.argmax(path.force))
     assert 0 < i < len(path.force) - 1  # a maximum inside the push
-    assert r.F_back >= path.force[i] - 1e-12 * path.force[i]
+    assert r.F_back >= path.force[i] * (1.0 - FORCE_TOL)  # the peak, up to the forces' accuracy
     assert r.F_back == pytest.approx(path.force[i], rel=1e-3)
 
 
