@@ -81,11 +81,15 @@ def check_one(kw, time_limit, nodes):
     if r.bistable and r.status != "ok":
         problems.append(f"bistable with status {r.status!r}")
     if r.status == "monostable" and g.h > 0:
-        # an answer only from a path that ran its course: 3 h at least (a cut path is a
-        # failure, never "monostable")
+        # an answer only from a path that ran its course: 3 h, or the geometric limit where
+        # that is nearer (a cut path is a failure, never "monostable")
+        from snapmorph.units.planar import push_limit
+
         d_end = float(r.curve[0][-1]) if len(r.curve[0]) else 0.0
-        if not d_end >= 3.0 * g.h * (1.0 - 1e-9):
+        if not d_end >= min(3.0 * g.h, push_limit(g)) * (1.0 - 1e-9):
             problems.append(f"monostable on a path that ended at d = {d_end / g.h:.4g} h")
+    if problems:
+        print(f"  problem: {kw}: {problems}", flush=True)
     if r.status == "ok":
         vals = [r.F_cr, r.d_cr, r.d_unstable, r.d_second, r.S, r.theta_deg, r.energy_barrier,
                 r.energy_stored]
