@@ -336,7 +336,8 @@ class _PlanarPush:
         if path.status.startswith("timeout") or (late is not None and late()):
             raise _Timeout(f"while following the path ({len(path.force)} steps)")
         self.counts = path.negative_eigenvalues if mgdc else None
-        if path.status == "ok" and _goes_on(path, self.counts):
+        if path.status == "ok" and self.limit > path.displacement[-1] \
+                and _goes_on(path, self.counts):  # (a tall arch's limit may be below 3 h)
             path = self._push_on(path, rule, late)
         elif mgdc and path.status != "ok":
             path = self._as_a_rig(path, rule, late)
