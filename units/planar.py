@@ -96,25 +96,26 @@ class UnitResult(UnitResultBase):
     energy_barrier: float = NAN
     energy_stored: float = NAN
     bifurcation: bool | None = None
-    #: N: the most negative force on the snap path (after F_cr, up to state (iii)), by
-    #: displacement-controlled solves; NaN when F does not fall below zero
     F_min: float = NAN
-    #: m: the apex displacement d at F_min
+    """N: the most negative force on the snap path (after F_cr, up to state (iii)), by
+    displacement-controlled solves; NaN when F does not fall below zero"""
     d_Fmin: float = NAN
-    #: N (> 0): the snap-back load: the released state (iii) on the rig's rollers, its apex
-    #: pushed back up (+z), the force peak that returns it to (i); NaN when there is no
-    #: released state or no peak
+    """m: the apex displacement d at F_min"""
     F_back: float = NAN
-    #: N/m: the released state (iii)'s tangent stiffness against an apex force,
-    #: 1 / (e^T K^-1 e), on the rollers; NaN when there is no released state
+    """N (> 0): the snap-back load: the released state (iii) on the rig's rollers, its apex
+    pushed back up (+z), the force peak that returns it to (i); NaN when there is no
+    released state or no peak"""
     stiffness_released: float = NAN
-    #: dimensionless: the largest surface strain |eps| + |kappa - kappa_bar| t / 2 over the
-    #: snap path's states (d = 0 to state (iii)) and its exact states, arch and base
+    """N/m: the released state (iii)'s tangent stiffness against an apex force, 1 / (e^T K^-1
+    e), on the rollers; NaN when there is no released state"""
     strain_max: float = NAN
-    #: dimensionless: the same in the released state (iii); NaN when there is none
+    """dimensionless: the largest surface strain |eps| + |kappa - kappa_bar| t / 2 over the
+    snap path's states (d = 0 to state (iii)) and its exact states, arch and base"""
     strain_max_released: float = NAN
-    #: where strain_max sits: "arch" or "base", its part and x / L (`units.metrics.strain_place`)
+    """dimensionless: the same in the released state (iii); NaN when there is none"""
     strain_where: str = ""
+    """where strain_max sits: "arch" or "base", its part and x / L
+    (`units.metrics.strain_place`)"""
 
     STATE_KEYS = ("theta_end_deg", "energy_barrier", "energy_stored")
     MORE_KEYS = ("bifurcation", "F_min", "d_Fmin", "F_back", "stiffness_released",

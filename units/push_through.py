@@ -339,7 +339,6 @@ class Rules:
     unstable_state: bool = True
     exact: tuple = ("ii", "iii")
     stability: bool = True
-    #: the peak search's tolerance, a fraction of the samples' spacing (`refine_peak`)
     peak_tol: float = 2e-3
 
 

@@ -27,7 +27,7 @@ IMPORTS = {
                "import snapmorph.solver.structure as structure",
 }
 
-#: name -> (snippet printing one JSON line, what is wrong in the reference's answer)
+#: name -> a snippet printing one JSON line (the answer to compare)
 CASES = {
     "step cap (MGDC stopped at 30 steps)": r'''
 push = structure.Structure.push
@@ -43,32 +43,20 @@ for n in (101, 201):
     out.append([n, r.status[:80], r.d_second / g.h, r.S, float(min(r.curve[1]) / r.F_cr)])
 print(json.dumps(out))
 ''',
-    "L = 1e153 m": r'''
-try:
-    L = 1e153
-    r = simulate_unit(UnitGeometry(L=L, h=0.2 * L, t=0.005 * L, w=0.05 * L, b=0.05 * L,
-                                   joint_length=0.03175 * L))
-    print(json.dumps(["result", r.status[:80], r.F_cr]))
-except Exception as exc:
-    print(json.dumps([type(exc).__name__, str(exc)[:100]]))
-''',
-    "L = 1e-300 m": r'''
-try:
-    L = 1e-300
-    r = simulate_unit(UnitGeometry(L=L, h=0.2 * L, t=0.005 * L, w=0.05 * L, b=0.05 * L,
-                                   joint_length=0.03175 * L))
-    print(json.dumps(["result", r.status[:80], r.F_cr]))
-except Exception as exc:
-    print(json.dumps([type(exc).__name__, str(exc)[:100]]))
-''',
-    "E = 1e-300 Pa": r'''
-try:
-    r = simulate_unit(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3, E=1e-300))
-    print(json.dumps(["result", r.status[:80], r.F_cr]))
-except Exception as exc:
-    print(json.dumps([type(exc).__name__, str(exc)[:100]]))
-''',
 }
+
+#: a unit at extreme scale: the specimen's proportions at base length L (m), modulus E (Pa)
+EXTREME = r'''
+try:
+    L, E = {L!r}, {E!r}
+    r = simulate_unit(UnitGeometry(L=L, h=0.2 * L, t=0.005 * L, w=0.05 * L, b=0.05 * L, E=E,
+                                   joint_length=0.03175 * L))
+    print(json.dumps(["result", r.status[:80], r.F_cr]))
+except Exception as exc:
+    print(json.dumps([type(exc).__name__, str(exc)[:100]]))
+'''
+for _L, _E in ((1e153, 2.2e9), (1e-300, 2.2e9), (0.1, 1e-300)):
+    CASES[f"L = {_L:g} m, E = {_E:g} Pa"] = EXTREME.format(L=_L, E=_E)
 
 
 def run(which: str, tree: Path, snippet: str):
