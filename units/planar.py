@@ -328,17 +328,23 @@ class _PlanarPush:
         mgdc = options["method"] == "mgdc"
         rule = stop
 
-        def stop(rows):  # the same test on the force-control counts, and the deadline
+        limited = []
+
+        def stop(rows):  # the same test on the force-control counts, the deadline, the limit
             if late is not None and late():
                 return True
-            return rule({"d": rows["d"], "F": rows["F"],
-                         "neg_force": rows["neg"] if mgdc else None})
+            if rule({"d": rows["d"], "F": rows["F"], "neg_force": rows["neg"] if mgdc else None}):
+                return True
+            # a tall arch's limit lies below 3 h: past it the push only stretches the rods
+            limited.append(rows["d"][-1] >= self.limit)
+            return limited[-1]
         path = st.push(self.model.apex, DOWN, self.distance, stop=stop, **options)
         if path.status.startswith("timeout") or (late is not None and late()):
             raise _Timeout(f"while following the path ({len(path.force)} steps)")
         self.counts = path.negative_eigenvalues if mgdc else None
-        if path.status == "ok" and self.limit > path.displacement[-1] \
-                and _goes_on(path, self.counts):  # (a tall arch's limit may be below 3 h)
+        if path.status == "ok" and limited and limited[-1]:
+            path = dataclasses.replace(path, status=self._limit_status())
+        elif path.status == "ok" and _goes_on(path, self.counts):
             path = self._push_on(path, rule, late)
         elif mgdc and path.status != "ok":
             path = self._as_a_rig(path, rule, late)

@@ -43,6 +43,11 @@ for n in (101, 201):
     out.append([n, r.status[:80], r.d_second / g.h, r.S, float(min(r.curve[1]) / r.F_cr)])
 print(json.dumps(out))
 ''',
+    "tall arch (h/L = 0.82, time limit 20 s)": r'''
+g = UnitGeometry(L=0.1, h=0.08188, t=0.928e-3, w=5e-3, b=0.00388)
+r = simulate_unit(g, time_limit=20)
+print(json.dumps([r.status[:60], r.reason[-60:], len(r.curve[1])]))
+''',
 }
 
 #: a unit at extreme scale: the specimen's proportions at base length L (m), modulus E (Pa)

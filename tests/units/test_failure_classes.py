@@ -99,6 +99,17 @@ def test_the_geometric_limit_is_beyond_the_push_and_stated():
     assert push_limit(g) > 3.0 * g.h
 
 
+def test_a_tall_arch_answers_at_its_geometric_limit():
+    # h/L = 0.82: the limit (2.2 h) lies below the old 3 h push, past which MGDC crawled on
+    # stretching rods until a time limit (ecfa12b: "timeout" at 20 s)
+    g = UnitGeometry(L=0.1, h=0.08188, t=0.928e-3, w=5e-3, b=0.00388)
+    r = simulate_unit(g, time_limit=300)
+    assert r.status == "monostable" and "geometric limit" in r.reason, r.status
+    d_end = r.curve[0][-1]
+    assert push_limit(g) <= d_end < 3.0 * g.h
+    assert push_limit(g) == pytest.approx(2.225 * g.h, rel=1e-3)
+
+
 # ------------------------------------------------------------------ extreme scales
 @pytest.mark.parametrize("L, E", [(1e153, 2.2e9), (1e-300, 2.2e9), (0.1, 1e-300),
                                   (0.1, 1e300), (1e100, 1e100)])
