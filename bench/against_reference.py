@@ -7,7 +7,8 @@ run from there (its own top-level packages, its own numba cache). Each round run
 cases in two fresh processes, reference then current, so that both see the same machine
 phase; a process warms the kernels first and then times warm calls. Printed: the specimen
 (L 100, h 20, t 0.5, w = b = 5 mm) and 20 points of the default map grid, the median over
-rounds of each process's median, and their ratio.
+rounds of each process's median, and their ratio; and the same in CPU time (the process's
+own, which a machine loaded by other work distorts least).
 """
 
 from __future__ import annotations
@@ -30,15 +31,17 @@ import json, statistics, sys, time
 {imports}
 g = UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3)
 simulate_unit(g)                     # kernels compiled or loaded from the cache
-spec = []
+spec, spec_cpu = [], []
 for _ in range({repeat}):
-    t0 = time.perf_counter(); r = simulate_unit(g); spec.append(time.perf_counter() - t0)
+    t0, c0 = time.perf_counter(), time.process_time(); r = simulate_unit(g)
+    spec.append(time.perf_counter() - t0); spec_cpu.append(time.process_time() - c0)
 points = [tuple(p) for p in json.loads(sys.argv[1])]
 solve_point(*points[0])              # the map's own settings warmed up too
-t0 = time.perf_counter()
+t0, c0 = time.perf_counter(), time.process_time()
 recs = [solve_point(*p) for p in points]
-total = time.perf_counter() - t0
+total, total_cpu = time.perf_counter() - t0, time.process_time() - c0
 print(json.dumps({{"specimen_s": statistics.median(spec), "points_s": total,
+                  "specimen_cpu_s": statistics.median(spec_cpu), "points_cpu_s": total_cpu,
                   "specimen": [r.status, r.F_cr, r.theta_deg],
                   "statuses": [int(rec["status"]) for rec in recs]}}))
 '''
@@ -99,8 +102,8 @@ def main(argv=None):
         for which in ("reference", "current"):
             runs[which].append(run_case(which, tree if which == "reference" else ROOT,
                                         points, args.repeat))
-    med = {w: {k: statistics.median(r[k] for r in rs) for k in ("specimen_s", "points_s")}
-           for w, rs in runs.items()}
+    keys = ("specimen_s", "points_s", "specimen_cpu_s", "points_cpu_s")
+    med = {w: {k: statistics.median(r[k] for r in rs) for k in keys} for w, rs in runs.items()}
     ref, cur = med["reference"], med["current"]
     print(f"unit path against {args.ref} ({args.rounds} alternating rounds of fresh processes, "
           f"median of medians, one thread):")
@@ -108,6 +111,11 @@ def main(argv=None):
           f"{cur['specimen_s'] * 1e3:.1f} ms now: x{ref['specimen_s'] / cur['specimen_s']:.2f}")
     print(f"  20 default-map points: {ref['points_s']:.3f} s vs {cur['points_s']:.3f} s: "
           f"x{ref['points_s'] / cur['points_s']:.2f}")
+    print(f"  CPU time (this process only; what a loaded machine blurs least): specimen "
+          f"{ref['specimen_cpu_s'] * 1e3:.1f} vs {cur['specimen_cpu_s'] * 1e3:.1f} ms: "
+          f"x{ref['specimen_cpu_s'] / cur['specimen_cpu_s']:.2f}; 20 points "
+          f"{ref['points_cpu_s']:.3f} vs {cur['points_cpu_s']:.3f} s: "
+          f"x{ref['points_cpu_s'] / cur['points_cpu_s']:.2f}")
     a, b = runs["reference"][-1], runs["current"][-1]
     same = a["statuses"] == b["statuses"]
     print(f"  statuses of the 20 points {'identical' if same else 'DIFFER'}; specimen "

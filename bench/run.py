@@ -76,13 +76,15 @@ def main():
     med2, best2, _ = median_time(lambda: specimen_unit(check_self_standing=False))
     print(f"  the same without the self-standing check: median {med2*1e3:.1f} ms (best {best2*1e3:.1f} ms)")
 
-    for extra in ("bench_pipeline", "bench_stability", "bench_units3d", "bench_inverse",
+    for extra in ("bench_unit_path", "against_reference", "bench_pipeline", "bench_stability", "bench_units3d", "bench_inverse",
                   "bench_tolerance", "bench_rods3d", "bench_paths", "bench_multishape", "bench_loads"):
         path = os.path.join(HERE, extra + ".py")
         if os.path.exists(path):
             print(f"--- {extra}")
             sys.stdout.flush()
-            subprocess.run([sys.executable, path], check=False)
+            # the reference comparison: alternating fresh processes (3 rounds here)
+            args = ["--rounds", "3"] if extra == "against_reference" else []
+            subprocess.run([sys.executable, path, *args], check=False)
 
 
 if __name__ == "__main__":

@@ -35,14 +35,24 @@ def envelope_heights(n, *element_dofs):
     element with i, so column j reaches down to max{i : f_i <= j}. The factor and the solves
     then neither scan for it nor touch the zeros below it."""
     first = np.arange(n, dtype=np.int64)
+    rows, starts = [first], [first]
     for dofs in element_dofs:
         d = np.asarray(dofs, dtype=np.int64)
         if d.size == 0:
             continue
         lo = np.min(np.where(d >= 0, d, np.iinfo(np.int64).max), axis=1)
-        for c in range(d.shape[1]):
-            ok = d[:, c] >= 0
-            np.minimum.at(first, d[ok, c], lo[ok])
+        ok = d >= 0
+        rows.append(d[ok])
+        starts.append(np.broadcast_to(lo[:, None], d.shape)[ok])
+    # the smallest start of every row: sort (row, start) pairs, keep each row's first
+    # (what np.minimum.at does, without its per-element cost)
+    r, f = np.concatenate(rows), np.concatenate(starts)
+    order = np.lexsort((f, r))
+    r, f = r[order], f[order]
+    head = np.ones(len(r), dtype=bool)
+    head[1:] = r[1:] != r[:-1]
+    first = np.empty(n, dtype=np.int64)
+    first[r[head]] = f[head]
     return profile_heights(first)
 
 

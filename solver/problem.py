@@ -307,8 +307,12 @@ def state_from(structure, positions, name="positions"):
         q = np.ascontiguousarray(arr.copy())
     elif arr.shape == shape:
         q = q0
-        dofs = np.array([structure.node_dofs(i) for i in range(structure.n_nodes)])
-        q[dofs] = arr
+        view = structure.positions_of(q)
+        if np.shares_memory(view, q):  # the positions are a view of the state: write them
+            view[...] = arr
+        else:
+            dofs = np.array([structure.node_dofs(i) for i in range(structure.n_nodes)])
+            q[dofs] = arr
     else:
         raise ValueError(f"{name} must have shape {shape} (m) or {q0.shape}; got {arr.shape}")
     if not np.all(np.isfinite(q)):

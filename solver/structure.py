@@ -481,11 +481,32 @@ class Structure(ConstrainedStructure):
         """
         if self.n_nodes == 0:
             raise ValueError("the structure has no rods")
+        elements = self.elements()
+        ordering = self._ordering(extra_fixed, elements)
+        force_unit = self.E_max / E_REF if normalized else 1.0
+        loads = self._system_loads(force_unit) if dead_loads else None
+        system = ReducedSystem(self.elements(normalized), *ordering, loads=loads)
+        system.force_unit = force_unit
+        return system
+
+    def _ordering(self, extra_fixed, elements):
+        """(dof_map, n_reduced, bandwidth) of `reduced_system`, built once per set of held
+        components: a unit's pushes, probes and state checks reuse it (the key holds the
+        supports, the extra held components and the element tables it was built from)."""
+        key = (tuple(sorted((int(n), tuple(sorted(c))) for n, c in self._fixed.items())),
+               tuple((int(n), int(c)) for n, c in (extra_fixed or ())),
+               len(self._merges), len(self._rigid_groups))
+        memo = getattr(self, "_orderings", None)
+        if memo is None or memo[0] is not self._cache:  # built from other elements
+            memo = self._orderings = (self._cache, {})
+        if key not in memo[1]:
+            memo[1][key] = self._build_ordering(extra_fixed, elements)
+        return memo[1][key]
+
+    def _build_ordering(self, extra_fixed, elements):
         rep, fixed = self._held(extra_fixed)
         uniq, group = np.unique(rep, return_inverse=True)
         n_groups = len(uniq)
-
-        elements = self.elements()
         rows, cols = [], []
         for conn in (elements[0], elements[2], elements[4]):
             if conn.shape[0] == 0:
@@ -521,11 +542,8 @@ class Structure(ConstrainedStructure):
         node_map = dof_map.reshape(-1, 2)
         bw = bandwidth(*(node_map[conn].reshape(conn.shape[0], 2 * conn.shape[1])
                          for conn in (elements[0], elements[2], elements[4])))
-        force_unit = self.E_max / E_REF if normalized else 1.0
-        loads = self._system_loads(force_unit) if dead_loads else None
-        system = ReducedSystem(self.elements(normalized), dof_map, k, bw, loads=loads)
-        system.force_unit = force_unit
-        return system
+        dof_map.setflags(write=False)  # shared by every system built from this ordering
+        return dof_map, k, bw
 
     # ------------------------------------------------------------------ energy access
     def energy(self, positions=None) -> float:

@@ -75,6 +75,28 @@ def check_real(name: str, value, unit: str = "m", meaning: str | None = None) ->
     return out
 
 
+#: a unit is solved at the reference L = 0.1 m, E = 2.2 GPa and scaled back: its forces by
+#: (E / 2.2 GPa)(L / 0.1 m)^2, energies by that x L / 0.1 m, stiffnesses by that / (L / 0.1 m);
+#: each factor must lie within [1 / MAX_SCALE, MAX_SCALE] so that every result stays a normal
+#: double (the metrics span ~1e-100 to 1e100 of the factor at the domain's other edges)
+MAX_SCALE = 1e200
+
+
+def _scale_problem(L, E, q) -> str:
+    """Why L and E put the unit's results outside double precision, or "" (`MAX_SCALE`)."""
+    lg = math.log10(L / 0.1)
+    force = math.log10(E / PETG_E) + 2.0 * lg
+    top = math.log10(MAX_SCALE)
+    for what, x in (("forces (E L^2)", force), ("energies (E L^3)", force + lg),
+                    ("stiffnesses (E L)", force - lg)):
+        if abs(x) > top:
+            return (f"L and E (base length and Young's modulus): the unit's {what} must stay "
+                    f"within 1e{-top:.0f} to 1e{top:.0f} of those at L = 0.1 m, E = 2.2e9 Pa "
+                    f"(valid domain: beyond it they overflow or underflow double precision); "
+                    f"got 1e{x:.1f} with L = {q(L)}, E = {E:g} Pa")
+    return ""
+
+
 def geometry_problem(L, h, t, w, b, E, joint_length=JOINT_LENGTH_DEFAULT, bond_length=None,
                      unit: str = "m", scale: float = 1.0) -> str:
     """Why the (finite, real) dimensions cannot make a unit, or "" when they can.
@@ -89,6 +111,9 @@ def geometry_problem(L, h, t, w, b, E, joint_length=JOINT_LENGTH_DEFAULT, bond_l
             return f"{name} ({_MEANING[name]}, {unit}) must be > 0; got {q(value)}"
     if E <= 0:
         return f"E (Young's modulus, Pa) must be > 0; got {E!r}"
+    overflow = _scale_problem(L, E, q)
+    if overflow:
+        return overflow
     for name, value in (("h", h), ("b", b), ("joint_length", joint_length)):
         if value < 0:
             return f"{name} ({_MEANING[name]}, {unit}) must be >= 0; got {q(value)}"

@@ -40,9 +40,10 @@ from snapmorph.solver.problem import ConvergenceError
 from snapmorph.solver.stability import state_stability
 from snapmorph.solver.states import DisplacementProbe
 from snapmorph.units import status as statuses
-from snapmorph.units.geometry import (DEFAULT_NODES, PETG_E, UnitGeometry, build_unit, check_nodes,
-                                      check_real)
-from snapmorph.units.push_through import Rules, push_through
+from snapmorph.units.geometry import (DEFAULT_NODES, PETG_E, SUPPORT_OFFSET, UnitGeometry,
+                                      build_unit, check_nodes, check_real)
+from snapmorph.units.metrics import largest_strain, most_negative_force, snap_back, strain_place
+from snapmorph.units.push_through import Rules, parabola_peak, push_through, snap_crossings
 # the one crossing rule of every unit, under the names the tests check
 from snapmorph.units.push_through import (  # noqa: F401
     first_peak as _first_peak,
@@ -61,6 +62,14 @@ L_INTERNAL = 0.1  # m
 E_INTERNAL = PETG_E  # Pa
 DOWN = (0.0, -1.0)  # the apex is pushed towards the base
 METHODS = ("mgdc", "displacement")
+#: the default ``steps`` of an MGDC push: its steps adapt to the path (up to 8 x the first);
+#: F_cr and F_min come from displacement-controlled searches and S, theta from the exact
+#: state (iii), so a coarser path moves them by ~1e-9 (F) and ~1e-12 (S, theta) against 60
+MGDC_STEPS = 20
+#: the default ``steps`` of a displacement-controlled push (its steps are where it samples)
+RIG_STEPS = 60
+#: the peak searches' bracket (F_cr, F_min), a fraction of the path's spacing at 60 steps
+PEAK_TOL = 2e-3
 TIES = ("exact", "spring")
 BRANCHES = ("follow", "primary")
 
@@ -87,9 +96,30 @@ class UnitResult(UnitResultBase):
     energy_barrier: float = NAN
     energy_stored: float = NAN
     bifurcation: bool | None = None
+    F_min: float = NAN
+    """N: the most negative force on the snap path (after F_cr, up to state (iii)), by
+    displacement-controlled solves; NaN when F does not fall below zero"""
+    d_Fmin: float = NAN
+    """m: the apex displacement d at F_min"""
+    F_back: float = NAN
+    """N (> 0): the snap-back load: the released state (iii) on the rig's rollers, its apex
+    pushed back up (+z), the force peak that returns it to (i); NaN when there is no
+    released state or no peak"""
+    stiffness_released: float = NAN
+    """N/m: the released state (iii)'s tangent stiffness against an apex force, 1 / (e^T K^-1
+    e), on the rollers; NaN when there is no released state"""
+    strain_max: float = NAN
+    """dimensionless: the largest surface strain |eps| + |kappa - kappa_bar| t / 2 over the
+    snap path's states (d = 0 to state (iii)) and its exact states, arch and base"""
+    strain_max_released: float = NAN
+    """dimensionless: the same in the released state (iii); NaN when there is none"""
+    strain_where: str = ""
+    """where strain_max sits: "arch" or "base", its part and x / L
+    (`units.metrics.strain_place`)"""
 
     STATE_KEYS = ("theta_end_deg", "energy_barrier", "energy_stored")
-    MORE_KEYS = ("bifurcation",)
+    MORE_KEYS = ("bifurcation", "F_min", "d_Fmin", "F_back", "stiffness_released",
+                 "strain_max", "strain_max_released", "strain_where")
 
 
 def _check_choice(name, value, choices):
@@ -123,7 +153,7 @@ def simulate_unit(
     tie: str = "exact",
     tie_stiffness: float | None = None,
     check_self_standing: bool = True,
-    steps: int = 60,
+    steps: int | None = None,
     branch: str = "follow",
     critical: bool = True,
     time_limit: float | None = None,
@@ -133,7 +163,8 @@ def simulate_unit(
     ``nodes``: resolution (about the number of base nodes; None = the converged default);
     ``method``: "mgdc" (load control, the paper's) or "displacement";
     ``tie``: "exact" or "spring" bonds (``tie_stiffness`` N/m, None = 1e3 x the stiffest
-    adjacent edge); ``steps``: first-step size as a fraction of 3 h;
+    adjacent edge); ``steps``: first-step size as a fraction of 3 h (None: `MGDC_STEPS`
+    for "mgdc", `RIG_STEPS` for "displacement");
     ``branch``: at a bifurcation "follow" the branch the unit takes (default) or stay on the
     "primary" (symmetric) path; ``critical``: detect critical points and report stability
     (False: the bare path, no ``bifurcation`` flag and no per-state stability; state (iii)'s
@@ -157,7 +188,8 @@ def simulate_unit(
     _check_choice("branch", branch, BRANCHES)
     check_self_standing = check_flag("check_self_standing", check_self_standing)
     critical = check_flag("critical", critical)
-    check_steps(steps)
+    steps = (MGDC_STEPS if method == "mgdc" else RIG_STEPS) if steps is None else \
+        check_steps(steps)
     if tie_stiffness is not None:
         tie_stiffness = check_real("tie_stiffness", tie_stiffness, "N/m", "bond spring stiffness")
         if tie_stiffness <= 0:
@@ -226,6 +258,10 @@ def _rescale(r: UnitResult, g: UnitGeometry, length: float, force: float) -> Uni
     for name in ("d_cr", "d_unstable", "d_second", "S"):
         setattr(r, name, getattr(r, name) * length)
     r.F_cr *= force
+    r.F_min *= force
+    r.d_Fmin *= length
+    r.F_back *= force
+    r.stiffness_released *= force / length
     r.energy_barrier *= energy
     r.energy_stored *= energy
     d, F = r.curve
@@ -279,26 +315,122 @@ class _PlanarPush:
 
     failures = (ConvergenceError,)
 
-    def __init__(self, model, push, distance, deadline):
+    def __init__(self, model, push, distance, deadline, limit=np.inf):
         self.model, self.st = model, model.structure
         self.options, self.distance, self.deadline = push, distance, deadline
+        self.limit = limit  # m, the geometric limit the push may go on to (`push_limit`)
         self.X = self.st.reference_positions
-        self.probe = self.system = None
+        self.probe = self.system = self.counts = None
 
     def push(self, stop):
         st = self.st
         options, late = _push_options(st, self.options, self.deadline)
-        if late is not None:
-            rule = stop
+        mgdc = options["method"] == "mgdc"
+        rule = stop
 
-            def stop(rows):  # the same test, and the deadline
-                return late() or rule(rows)
+        limited = []
+
+        def stop(rows):  # the same test on the force-control counts, the deadline, the limit
+            if late is not None and late():
+                return True
+            if rule({"d": rows["d"], "F": rows["F"], "neg_force": rows["neg"] if mgdc else None}):
+                return True
+            # a tall arch's limit lies below 3 h: past it the push only stretches the rods
+            limited.append(rows["d"][-1] >= self.limit)
+            return limited[-1]
         path = st.push(self.model.apex, DOWN, self.distance, stop=stop, **options)
         if path.status.startswith("timeout") or (late is not None and late()):
             raise _Timeout(f"while following the path ({len(path.force)} steps)")
+        self.counts = path.negative_eigenvalues if mgdc else None
+        if path.status == "ok" and limited and limited[-1]:
+            path = dataclasses.replace(path, status=self._limit_status())
+        elif path.status == "ok" and _goes_on(path, self.counts):
+            path = self._push_on(path, rule, late)
+        elif mgdc and path.status != "ok":
+            path = self._as_a_rig(path, rule, late)
         self.system = st.reduced_system()  # force control: the actuator unloaded
         self.probe = _DeadlineProbe(st, self.model.apex, DOWN, deadline=self.deadline)
         return path
+
+    def _as_a_rig(self, path, rule, late):
+        """MGDC stopped before its distance (a step cap, a path that wanders or turns back
+        at a snap-back, a step-size underflow): the push again as a displacement-controlled
+        rig makes it, from d = 0 to the geometric limit `push_limit` (it jumps where the
+        rig's unit jumps, and passes regular points MGDC's steps failed at). Its path is
+        taken when it ran its course or passed a state (iii); else MGDC's stands (its
+        failure is the status)."""
+        options, _ = _push_options(self.st, self.options, self.deadline)
+        options = dict(options, method="displacement", steps=max(options["steps"], RIG_STEPS))
+
+        def stop(rows):
+            if late is not None and late():
+                return True
+            return rule({"d": rows["d"], "F": rows["F"], "neg_force": None})
+        rig = self.st.push(self.model.apex, DOWN, self.limit, stop=stop, **options)
+        if rig.status.startswith("timeout") or (late is not None and late()):
+            raise _Timeout(f"while following the path as a rig ({len(rig.force)} steps)")
+        j = snap_crossings(path.displacement, path.force, self.counts)[1]
+        counts = None  # displacement control: d only grows, the slope rule holds
+        if j is not None:
+            # (ii) on MGDC's path, which follows the unstable branch a rig cannot; the rig's
+            # path beyond the deepest d MGDC reached (where the rig jumps on) after it
+            deepest = float(np.max(path.displacement[:j + 1]))
+            beyond = np.flatnonzero(rig.displacement > deepest)
+            if len(beyond):
+                rig = _joined(_head(path, j + 1), _head(rig, None, beyond[0] - 1), rig.status)
+                counts = np.concatenate([self.counts[:j + 1],
+                                         np.full(len(rig) - j - 1, -1)])
+        found = snap_crossings(rig.displacement, rig.force, counts)[2] is not None
+        if not (found or rig.status == "ok"):
+            return path
+        self.counts = counts
+        status = rig.status
+        if status == "ok" and not found:
+            status = self._limit_status()
+        rig.info["mgdc_status"] = path.status
+        return dataclasses.replace(rig, status=status)
+
+    def _limit_status(self):
+        limit = self.limit
+        return (f"ok: the apex reached the geometric limit d = {limit:.6g} m "
+                f"({limit / (self.distance / 3.0):.4g} h = {LIMIT_TEXT})")
+
+    def force_counts(self, path):
+        """The samples' negative-eigenvalue counts under force control (MGDC's own), -1 on
+        the displacement-controlled part past 3 h (`_push_on`); None for a
+        displacement-controlled push (the slope rule: d only grows there)."""
+        return self.counts
+
+    def _push_on(self, path, rule, late):
+        """The push ran 3 h with F below zero (or falling) and no state (iii): on by
+        displacement control from its last state to the geometric limit `push_limit` (the
+        stop test sees the whole path). Returns the joined path; its status names the
+        limit when it is reached without state (iii)."""
+        limit = self.limit
+        head = {"d": list(path.displacement), "F": list(path.force),
+                "neg_force": None if self.counts is None else list(self.counts)}
+
+        def stop(rows):
+            if late is not None and late():
+                return True
+            neg = None if head["neg_force"] is None else \
+                head["neg_force"] + [-1] * (len(rows["d"]) - 1)
+            whole = {"d": head["d"] + rows["d"][1:], "F": head["F"] + rows["F"][1:],
+                     "neg_force": neg}
+            return rule(whole) or _turned_up(rows)
+        options, _ = _push_options(self.st, self.options, self.deadline)
+        options = {k: v for k, v in options.items() if k in ("critical", "time_limit")}
+        more = self.st.push(self.model.apex, DOWN, limit, method="displacement", stop=stop,
+                            start=path.positions[-1],
+                            steps=max(self.options["steps"], RIG_STEPS), **options)
+        if more.status.startswith("timeout") or (late is not None and late()):
+            raise _Timeout(f"while following the path past 3 h ({len(more.force)} steps)")
+        status = more.status
+        if status == "ok" and not more.displacement[-1] < limit:
+            status = self._limit_status()
+        if self.counts is not None:
+            self.counts = np.concatenate([self.counts, np.full(len(more) - 1, -1)])
+        return _joined(path, more, status)
 
     def states(self, path):
         return path.positions
@@ -321,11 +453,84 @@ class _PlanarPush:
         _check_deadline(self.deadline, stage)
 
 
+#: how `push_limit` bounds the push (quoted in the status of a push that reaches it)
+LIMIT_TEXT = ("h + the arch's arc length from its bond's inner end to the apex + the base's "
+              "length from that end to the roller: the inextensible unit cannot push further")
+
+
+def push_limit(g: UnitGeometry) -> float:
+    """The farthest (m) the apex of an inextensible unit can be pushed towards the base: the
+    bond's inner end B lies within the base's length |x_B - x_roller| of its roller (at
+    z = 0), the apex within the arch's arc length s_BA of B, so d <= h + s_BA + |x_B -
+    x_roller|. A push that passes it must stretch the rods: a push that reaches it without
+    state (iii) has none to find."""
+    x_b = g.bond
+    s_ba = (g.flat_length - x_b) + 0.5 * g.arch_length
+    return g.h + s_ba + abs(x_b - SUPPORT_OFFSET * g.L)
+
+
+def _goes_on(path, counts) -> bool:
+    """Should the push go on past its 3 h? Yes when no state (iii) was passed and, after
+    the force peak, F has fallen below zero or is still falling at the end."""
+    d, F = path.displacement, path.force
+    i_pk, j, k = snap_crossings(d, F, counts)
+    if k is not None or len(F) < 3:
+        return False
+    after = F[(i_pk or 0):]
+    return bool(np.min(after) < 0.0 or (F[-1] < F[-2] and d[-1] > d[-2]))
+
+
+def _turned_up(rows) -> bool:
+    """The push past 3 h may end where F, still above zero, rises again (no snap-through
+    ahead: F did not fall below zero)."""
+    d, F = rows["d"], rows["F"]
+    return len(F) > 2 and min(F) > 0.0 and F[-1] > F[-2] and d[-1] > d[-2]
+
+
+def _head(path, stop, start=0):
+    """Rows [start, stop) of a path (its critical points in that range of d kept)."""
+    rows = slice(start, stop)
+    d = path.displacement[rows]
+    lo, hi = float(np.min(d)), float(np.max(d))
+    return dataclasses.replace(
+        path, displacement=d, force=path.force[rows], positions=path.positions[rows],
+        energy=path.energy[rows], iterations=path.iterations[rows],
+        negative_eigenvalues=path.negative_eigenvalues[rows],
+        negative_eigenvalues_displacement=path.negative_eigenvalues_displacement[rows],
+        critical_points=[c for c in path.critical_points if lo <= c.d <= hi],
+        fields={k: v[rows] for k, v in path.fields.items()})
+
+
+def _joined(path, more, status):
+    """The path ``path`` followed by ``more`` (which starts at its last state), as one."""
+    def cat(a, b):
+        return np.concatenate([np.asarray(a), np.asarray(b)[1:]])
+
+    info = dict(path.info)
+    info["total_iterations"] = (path.info.get("total_iterations", 0)
+                                + more.info.get("total_iterations", 0))
+    info["pushed_on"] = {"from_d": float(path.displacement[-1]), "method": more.method,
+                         "status": more.status}
+    fields = {k: cat(v, more.fields[k]) for k, v in path.fields.items() if k in more.fields}
+    return dataclasses.replace(
+        path, displacement=cat(path.displacement, more.displacement),
+        force=cat(path.force, more.force), positions=cat(path.positions, more.positions),
+        status=status, energy=cat(path.energy, more.energy),
+        iterations=cat(path.iterations, more.iterations),
+        negative_eigenvalues=cat(path.negative_eigenvalues, more.negative_eigenvalues),
+        negative_eigenvalues_displacement=cat(path.negative_eigenvalues_displacement,
+                                              more.negative_eigenvalues_displacement),
+        info=info, critical_points=list(path.critical_points) + list(more.critical_points),
+        fields=fields)
+
+
 def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, deadline=None):
     st = model.structure
     critical = push["critical"]
-    out = push_through(_PlanarPush(model, push, 3.0 * g.h, deadline),
-                       Rules(peak_stability=critical))
+    pusher = _PlanarPush(model, push, 3.0 * g.h, deadline, push_limit(g))
+    # the peak search as fine in d as with 60 steps, whatever the path's spacing
+    tol = PEAK_TOL * push["steps"] / RIG_STEPS
+    out = push_through(pusher, Rules(peak_stability=critical, peak_tol=tol))
     if out.error is not None:  # a zero-force state not found: the simulation failed
         raise out.error
     path = out.path
@@ -351,6 +556,20 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
         result.bifurcation = any(c.d <= d_snap for c in path.bifurcations)
         if i_pk is not None:
             result.stability["states"]["i"] = out.stability["i"]
+    # the snap path: from d = 0 to the crossing of state (iii) (the whole path without one)
+    end = len(out.curve[1]) - 1 if out.crossings[1] is None else out.crossings[1]
+    result.F_min, result.d_Fmin = most_negative_force(
+        pusher.probe, *out.curve, path.positions, i_pk, end, _PlanarPush.failures, tol)
+    rods = {"arch": arch, "base": base}
+    X = st.reference_positions
+    states = np.concatenate([path.positions[:end + 1], [*out.states.values()]]) \
+        if out.states else path.positions[:end + 1]
+    top, rod, node, k, series = largest_strain(states, X, rods, g.t)
+    result.strain_max = top
+    if k <= end:  # on the path: between samples, the vertex of the parabola through three
+        d = out.curve[0]
+        result.strain_max = max(top, parabola_peak(d[:end + 1], series[:end + 1], k)[0])
+    result.strain_where = strain_place(rod, X[rods[rod][node], 0], g.L)
     if "iii" not in out.states:  # no second state: monostable, or the path failed
         result.status, result.reason = out.status, out.reason
         return result
@@ -386,7 +605,30 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
                 "theta_end_deg": chord_angle(rb),
                 "arch": released[arch].copy(),
             }
+            result.strain_max_released = largest_strain(released, X, rods, g.t)[0]
+            _check_deadline(deadline, "before the snap-back push")
+            _snap_back(result, g, nodes, tie, tie_stiffness, released, push["steps"],
+                       deadline)
     return result
+
+
+def _snap_back(result, g, nodes, tie, tie_stiffness, released, steps, deadline):
+    """F_back and stiffness_released of a bistable, self-standing result (`units.metrics.
+    snap_back`): the unit without its actuator on the rollers, its base middle held in x."""
+    back = build_unit(g, nodes=nodes, tie=tie, tie_stiffness=tie_stiffness, actuator=False)
+    back.structure.fix(back.base_mid, "x")
+    options = {} if deadline is None else {"time_limit": max(deadline - time.perf_counter(),
+                                                             1e-3)}
+    try:
+        # a third of the push's steps: the peak is located by displacement-controlled
+        # solves, not read off the samples (F_back moves by ~1e-10 relative against 60)
+        F_back, _, k, path = snap_back(back, released, 3.0 * g.h, max(1, steps // 3),
+                                       options, _PlanarPush.failures)
+    except ConvergenceError:
+        return
+    if path.status.startswith("timeout"):
+        raise _Timeout("while pushing the released unit back")
+    result.F_back, result.stiffness_released = F_back, k
 
 
 def _state_stability(st, model, positions, system):

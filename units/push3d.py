@@ -97,7 +97,13 @@ class RodUnitPush:
         self.probe = self.X = self.system = None
 
     def push(self, stop):
-        options = {"target_iterations": MGDC_TARGET_ITERATIONS} if self.method == "mgdc" else {}
+        mgdc = self.method == "mgdc"
+        options = {"target_iterations": MGDC_TARGET_ITERATIONS} if mgdc else {}
+        rule = stop
+
+        def stop(rows):  # MGDC's force-control counts classify the crossings
+            return rule({"d": rows["d"], "F": rows["F"],
+                         "neg_force": rows.get("neg") if mgdc else None})
         try:
             path = self.st.push(self.node, DOWN, self.distance, method=self.method, stop=stop,
                                 steps=self.steps, critical=self.critical, **options)
@@ -109,6 +115,11 @@ class RodUnitPush:
         self.X = np.asarray(path.positions[0])
         self.probe = _probe(self.st, self.node)
         return path
+
+    def force_counts(self, path):
+        """MGDC's negative-eigenvalue counts under force control (None: displacement control,
+        or a path without them)."""
+        return getattr(path, "negative_eigenvalues", None) if self.method == "mgdc" else None
 
     def states(self, path):
         return path_states(self.st, path)

@@ -44,7 +44,10 @@ class PushModel(Protocol):
     propagate); ``probe``: displacement-controlled solves of the pushed node
     (`solver.states.DisplacementProbe`: ``solve(guess, d) -> (positions, F, negative
     eigenvalues)`` and ``last_state``), or None (then F_cr is read from the samples and a
-    zero-force state from Newton only); set by `push`."""
+    zero-force state from Newton only); set by `push`. Optional ``force_counts(path)``:
+    the samples' negative-eigenvalue counts under force control ((K,) ints; the zero
+    crossings are classified by them, `zero_crossings`), or None (the slope rule); a model
+    that gives them passes them to its stop test as ``rows["neg_force"]``."""
 
     failures: tuple
     probe: object
@@ -89,17 +92,30 @@ def largest_force(F):
     return int(np.argmax(F))
 
 
-def zero_crossings(d, F, start=0):
+def zero_crossings(d, F, start=0, neg=None):
     """Zero crossings of F along the path after sample ``start``, in path order:
-    [(i, slope sign)] where samples i-1 and i bracket the zero and the sign is that of dF/dd
-    between them (-1: an unstable equilibrium under displacement control, such as (ii);
-    +1: a candidate stable state, such as (iii)). A path running backwards in d (snap-back)
-    flips the sign: it is the slope that classifies a crossing, not the direction of F."""
+    [(i, kind)] where samples i-1 and i bracket the zero; kind -1: an unstable equilibrium
+    at F = 0 such as (ii), +1: a candidate stable state such as (iii).
+
+    ``neg``: the samples' negative-eigenvalue counts under force control (the drivers'
+    inertia counts of the tangent stiffness with the pushed node loaded, not held): a zero
+    of F is a state of the unit with its actuator unloaded, so the count at the bracketing
+    sample nearer the zero classifies it (0: stable, +1; more: unstable, -1). A count below
+    0 (unknown, e.g. a sample inserted by a displacement-controlled search) and ``neg`` None
+    fall back on the sign of dF/dd between the two samples (a path running backwards in d
+    flips it): right while d increases, but on a path that snaps back (d decreasing) past a
+    turning point of d the chord's slope misreads an unstable state as a stable one."""
     out = []
     for i in range(max(start, 0) + 1, len(F)):
         if i == 1 and F[0] == 0.0:
             continue  # the unloaded start is not a crossing
         if (F[i - 1] >= 0.0 > F[i]) or (F[i - 1] <= 0.0 < F[i]):
+            count = -1
+            if neg is not None:
+                count = neg[i] if abs(F[i]) < abs(F[i - 1]) else neg[i - 1]
+            if count >= 0:
+                out.append((i, -1 if count > 0 else 1))
+                continue
             dF = F[i] - F[i - 1]
             dd = d[i] - d[i - 1]
             slope = np.sign(dF) * (np.sign(dd) if dd != 0 else 1.0)
@@ -107,33 +123,40 @@ def zero_crossings(d, F, start=0):
     return out
 
 
-def classify_crossings(crossings):
-    """(j, k) of the zero crossings [(i, slope sign)] after the peak: j the first with
-    dF/dd < 0 (the unstable state (ii)), k the next one with dF/dd > 0 (the candidate second
-    stable state (iii)); None where there is none. The one classification rule."""
-    j = next((i for i, slope in crossings if slope < 0), None)
-    k = next((i for i, slope in crossings if slope > 0 and j is not None and i > j), None)
+def classify_crossings(crossings, depth=None):
+    """(j, k) of the zero crossings [(i, kind)] after the peak: j the first unstable one
+    (the state (ii)), k the next stable one (the candidate second stable state (iii)) that
+    lies deeper than (ii) (``depth[i]``: the d of crossing i, when given: a stable zero
+    behind (ii) is the path come back to the first state, not a second one); None where
+    there is none. The one classification rule."""
+    j = next((i for i, kind in crossings if kind < 0), None)
+    k = next((i for i, kind in crossings if kind > 0 and j is not None and i > j
+              and (depth is None or depth[i] > depth[j])), None)
     return j, k
 
 
-def snap_crossings(d, F):
+def snap_crossings(d, F, neg=None):
     """(i_pk, j, k) of a push's F-d samples: i_pk the first force maximum (None if none), j
     and k the crossings of (ii) and (iii) after it (`classify_crossings`); a crossing is
-    between samples i-1 and i. The slope between the bracketing samples classifies a
-    crossing, not the direction in which F changes sign: on a path that snaps back (d
-    decreasing) the two differ."""
+    between samples i-1 and i, and (iii) lies deeper (larger d, interpolated) than (ii).
+    ``neg``: the samples' force-control inertia counts, which classify the crossings
+    (`zero_crossings`; None: the slope between the samples).""" 
+    d, F = np.asarray(d, float), np.asarray(F, float)
     i_pk = first_peak(F)
-    crossings = zero_crossings(np.asarray(d, float), np.asarray(F, float), start=(i_pk or 0))
-    return (i_pk, *classify_crossings(crossings))
+    crossings = zero_crossings(d, F, start=(i_pk or 0),
+                               neg=None if neg is None else np.asarray(neg))
+    depth = {i: d[i - 1] + F[i - 1] / (F[i - 1] - F[i]) * (d[i] - d[i - 1])
+             for i, _ in crossings}
+    return (i_pk, *classify_crossings(crossings, depth))
 
 
 def second_state_passed(rows) -> bool:
-    """The push's stop test: the path has passed a candidate (iii) (`snap_crossings`; on a
-    path that snaps back it does not stop at a zero of F that is unstable)."""
+    """The push's stop test: the path has passed a candidate (iii) (`snap_crossings`, with
+    the rows' force-control counts ``rows["neg_force"]`` when the model gives them)."""
     F = rows["F"]
-    if len(F) < 3:
+    if len(F) < 3 or not min(F) < 0.0:  # (ii) and (iii) need F below zero (cheap first)
         return False
-    return snap_crossings(rows["d"], F)[2] is not None
+    return snap_crossings(rows["d"], F, rows.get("neg_force"))[2] is not None
 
 
 def parabola_peak(d, F, i):
@@ -169,14 +192,15 @@ def refine_peak(probe, d, F, Q, i, failures, tol=2e-3):
     return (*parabola_peak(d, F, i), False)
 
 
-def refine_dips(probe, d, F, P, Q, i_pk, failures=(Exception,), tol=2e-3):
+def refine_dips(probe, d, F, P, Q, i_pk, failures=(Exception,), tol=2e-3, neg=None):
     """Samples with the minimum of every shallow dip of F (a local minimum after the peak
     with 0 < F < DIP_FRACTION F_cr between two path samples) inserted, located by Brent's
     search on displacement-controlled solves from the nearest sample; returns (d, F, P, Q)
-    (the inputs when nothing was inserted). Only a dip the search takes below zero is
-    inserted: it makes the zero crossings of a marginally bistable unit visible."""
+    (the inputs when nothing was inserted), and the counts ``neg`` with -1 (unknown) at the
+    inserted samples when given. Only a dip the search takes below zero is inserted: it
+    makes the zero crossings of a marginally bistable unit visible."""
     if probe is None or i_pk is None or len(F) < 3:
-        return d, F, P, Q
+        return (d, F, P, Q) if neg is None else (d, F, P, Q, neg)
     F_cr = F[i_pk]
     inserts = []
     for m in range(i_pk + 1, len(F) - 1):
@@ -207,14 +231,18 @@ def refine_dips(probe, d, F, P, Q, i_pk, failures=(Exception,), tol=2e-3):
         if Fx < 0.0:
             inserts.append((m + 1 if x > d[m] else m, x, Fx, pos, q))
     if not inserts:
-        return d, F, P, Q
+        return (d, F, P, Q) if neg is None else (d, F, P, Q, neg)
     d, F, P, Q = list(d), list(F), list(P), list(Q)
+    neg = None if neg is None else list(neg)
     for at, x, Fx, pos, q in sorted(inserts, key=lambda t: -t[0]):
         d.insert(at, x)
         F.insert(at, Fx)
         P.insert(at, pos)
         Q.insert(at, q)
-    return np.asarray(d), np.asarray(F), np.asarray(P), np.asarray(Q)
+        if neg is not None:
+            neg.insert(at, -1)  # a displacement-controlled solve: no force-control count
+    out = np.asarray(d), np.asarray(F), np.asarray(P), np.asarray(Q)
+    return out if neg is None else (*out, np.asarray(neg))
 
 
 def zero_force_state(model, d, F, P, Q, i):
@@ -259,14 +287,18 @@ def zero_force_state(model, d, F, P, Q, i):
 
 # ---------------------------------------------------------------------------- the wording
 def no_second_state(path_status: str, j, d_end: float):
-    """(status, reason) of a push on which no state (iii) was found: "monostable" when the
-    path ran its course (or stopped with F never below zero), else the path's failure as a
-    "not converged" status."""
-    if path_status == "ok" or (j is None and path_status.startswith("stopped")):
+    """(status, reason) of a push on which no state (iii) was found: "monostable" only when
+    the path ran its course (``path_status`` "ok": it reached its distance or its model's
+    stop test ended it; "ok: ..." says where it ended); a path that stopped before ("stopped: ...", "not converged: ...",
+    "timeout: ...") gives its failure as a "not converged" or "timeout" status."""
+    if path_status == "ok" or path_status.startswith("ok: "):
         reason = ("no snap-through: F does not fall below zero" if j is None else
                   "F crosses zero downwards but does not rise through zero again "
                   f"before d = {d_end:.4g} m")
+        if path_status.startswith("ok: "):  # how far the path went (a stated limit)
+            reason += f" ({path_status[4:]})"
         return "monostable", reason
+    # a path cut before its distance (step cap, wandering, underflow, time) answers nothing
     status = (path_status if path_status.startswith(("not converged", "timeout"))
               else f"not converged: {path_status}")
     return status, status
@@ -296,7 +328,8 @@ class Rules:
     refine_dips: look for a shallow dip below zero the steps strode over (`refine_dips`);
     unstable_state: solve state (ii); exact: the states that must be found as equilibria
     (one that is not ends the experiment: "not converged"); stability: check (ii) and (iii)
-    (else (iii) found is the answer)."""
+    (else (iii) found is the answer); peak_tol: the peak search's bracket, a fraction of the
+    samples' spacing."""
 
     stop: Callable = second_state_passed
     peak: Callable = first_peak
@@ -306,6 +339,7 @@ class Rules:
     unstable_state: bool = True
     exact: tuple = ("ii", "iii")
     stability: bool = True
+    peak_tol: float = 2e-3
 
 
 @dataclass
@@ -315,7 +349,8 @@ class PushOutcome:
     states / full_states: "i", "ii", "iii" -> positions / full state vectors; peak: the
     path sample of F_cr; exact_states: (ii), (iii) solved as equilibria (not interpolated);
     stability: "i", "ii", "iii" -> `solver.stability.StateStability` (None: singular);
-    error: the failure of a state that was not found (None)."""
+    error: the failure of a state that was not found (None); crossings: the samples of the
+    crossings of (ii) and (iii)."""
 
     status: str
     path_status: str = ""
@@ -333,6 +368,8 @@ class PushOutcome:
     stability: dict = field(default_factory=dict)
     peak: int | None = None
     error: Exception | None = None
+    #: (j, k): the curve samples that end the zero crossings of (ii) and (iii) (None: none)
+    crossings: tuple = (None, None)
 
 
 def push_through(model, rules: Rules = Rules()) -> PushOutcome:
@@ -346,17 +383,22 @@ def push_through(model, rules: Rules = Rules()) -> PushOutcome:
     out = PushOutcome("ok", path_status=str(path.status), curve=(d.copy(), F.copy()), path=path)
     P, Q = np.asarray(path.positions), model.states(path)
     probe = model.probe
-    _, j, k = snap_crossings(d, F)
+    counts = getattr(model, "force_counts", None)
+    neg = None if counts is None else counts(path)
+    _, j, k = snap_crossings(d, F, neg)
     if k is None and rules.refine_dips:  # a shallow dip the steps strode over may go below 0
-        d2, F2, P2, Q2 = refine_dips(probe, d, F, P, Q, first_peak(F), model.failures)
-        if len(d2) > len(d):
-            d, F, P, Q = d2, F2, P2, Q2
+        refined = refine_dips(probe, d, F, P, Q, first_peak(F), model.failures, neg=neg)
+        if len(refined[0]) > len(d):
+            d, F, P, Q = refined[:4]
+            neg = None if neg is None else refined[4]
             out.curve = (d.copy(), F.copy())
-            _, j, k = snap_crossings(d, F)
+            _, j, k = snap_crossings(d, F, neg)
+    out.crossings = (j, k)
     i_pk = out.peak = rules.peak(F)
     if i_pk is not None:
         if rules.refine_peak:
-            out.F_cr, out.d_cr, exact = refine_peak(probe, d, F, Q, i_pk, model.failures)
+            out.F_cr, out.d_cr, exact = refine_peak(probe, d, F, Q, i_pk, model.failures,
+                                                    rules.peak_tol)
         else:
             (out.F_cr, out.d_cr), exact = parabola_peak(d, F, i_pk), False
         out.states["i"], out.full_states["i"] = np.asarray(P[i_pk]).copy(), Q[i_pk].copy()

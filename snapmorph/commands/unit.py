@@ -9,7 +9,8 @@ from snapmorph.commands._common import (add_result_files, add_unit_dimensions, f
                                         write_result_json)
 
 HELP = """Simulate one bistable unit: push its apex down until it snaps, and report F_cr,
-the equilibrium displacements, S, theta (actuated and released) and the energies. Lengths on
+the equilibrium displacements, S, theta (actuated and released), F_min, the snap-back load
+and stiffness of the released unit, the largest surface strain and the energies. Lengths on
 the command line are in millimetres; E is in pascals. (The Python API, units.planar /
 solver.unit, is SI throughout.)"""
 
@@ -84,6 +85,13 @@ def run(args: argparse.Namespace) -> int:
         ("self-standing", format_value(r.self_standing), ""),
         ("S released", format_value(rel.get("S", math.nan), 1e3), "mm"),
         ("theta released", format_value(rel.get("theta_deg", math.nan)), "deg"),
+        ("F_min", format_value(r.F_min), "N"),
+        ("d at F_min", format_value(r.d_Fmin, 1e3), "mm"),
+        ("snap-back load", format_value(r.F_back), "N"),
+        ("stiffness released", format_value(r.stiffness_released, 1e-3), "N/mm"),
+        ("strain max", format_value(r.strain_max), ""),
+        ("strain released", format_value(r.strain_max_released), ""),
+        ("strain max at", r.strain_where or "-", ""),
         ("energy barrier", format_value(r.energy_barrier, 1e3), "mJ"),
         ("energy stored (iii)", format_value(r.energy_stored, 1e3), "mJ"),
         ("nodes", str(r.n_nodes), ""),

@@ -8,7 +8,11 @@ joint and bond lengths, and simulated with a wall-time limit. Checked: every cal
 within its limit (plus a margin), with a known status; every "ok" result is bistable with
 finite numbers and its state (iii) is stable when re-checked independently (negative
 eigenvalues of the tangent stiffness with the apex unloaded); "bistable" never comes with
-another status.
+another status; "monostable" only on a path that ran its course (3 h at least, never a cut
+path). ``--nodes 101 --compare 201``: each geometry at both resolutions; an answer that flips
+(bistable at one, not at the other) is a problem.
+
+    python tests/units/fuzz_units.py --n 1000 --nodes 101 --compare 201 --time-limit 20
 """
 
 from __future__ import annotations
@@ -76,6 +80,16 @@ def check_one(kw, time_limit, nodes):
         problems.append(f"took {dt:.1f} s with time_limit {time_limit} s")
     if r.bistable and r.status != "ok":
         problems.append(f"bistable with status {r.status!r}")
+    if r.status == "monostable" and g.h > 0:
+        # an answer only from a path that ran its course: 3 h, or the geometric limit where
+        # that is nearer (a cut path is a failure, never "monostable")
+        from snapmorph.units.planar import push_limit
+
+        d_end = float(r.curve[0][-1]) if len(r.curve[0]) else 0.0
+        if not d_end >= min(3.0 * g.h, push_limit(g)) * (1.0 - 1e-9):
+            problems.append(f"monostable on a path that ended at d = {d_end / g.h:.4g} h")
+    if problems:
+        print(f"  problem: {kw}: {problems}", flush=True)
     if r.status == "ok":
         vals = [r.F_cr, r.d_cr, r.d_unstable, r.d_second, r.S, r.theta_deg, r.energy_barrier,
                 r.energy_stored]
@@ -102,8 +116,15 @@ def check_one(kw, time_limit, nodes):
     return problems, prefix or r.status, dt
 
 
-def run(n, seed=0, time_limit=5.0, nodes=41, log=None):
-    """Fuzz n geometries; returns (problems [(kw, list)], status counts, slowest seconds)."""
+#: the answered statuses whose change between two resolutions is a flag flip
+ANSWERS = ("ok", "monostable", "second state unstable")
+
+
+def run(n, seed=0, time_limit=5.0, nodes=41, log=None, compare=None, every=100):
+    """Fuzz n geometries; returns (problems [(kw, list)], status counts, slowest seconds).
+    ``compare``: a second resolution each geometry is also simulated at: an answer at both
+    that differs (bistable at one, not at the other) is a flag flip, a problem; counts then
+    holds "<status at nodes> / <status at compare>" pairs too."""
     rng = np.random.default_rng(seed)
     bad, counts, slowest = [], {}, 0.0
     for i in range(n):
@@ -111,9 +132,17 @@ def run(n, seed=0, time_limit=5.0, nodes=41, log=None):
         problems, prefix, dt = check_one(kw, time_limit, nodes)
         counts[prefix] = counts.get(prefix, 0) + 1
         slowest = max(slowest, dt)
+        if compare:
+            more, other, dt2 = check_one(kw, time_limit, compare)
+            slowest = max(slowest, dt2)
+            problems += [f"at {compare} nodes: {m}" for m in more]
+            pair = f"{prefix} / {other}"
+            counts[pair] = counts.get(pair, 0) + 1
+            if prefix in ANSWERS and other in ANSWERS and prefix != other:
+                problems.append(f"flag flip: {prefix} at {nodes} nodes, {other} at {compare}")
         if problems:
             bad.append((kw, problems))
-        if log and (i + 1) % 100 == 0:
+        if log and (i + 1) % every == 0:
             log(f"{i + 1}/{n}: {counts}, slowest {slowest:.1f} s, {len(bad)} problems")
     return bad, counts, slowest
 
@@ -124,9 +153,14 @@ def main(argv=None):
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--time-limit", type=float, default=5.0)
     p.add_argument("--nodes", type=int, default=41)
+    p.add_argument("--compare", type=int, default=None,
+                   help="a second resolution (e.g. --nodes 101 --compare 201): flag flips")
+    p.add_argument("--every", type=int, default=100, help="progress line every N geometries")
     a = p.parse_args(argv)
     t0 = time.perf_counter()
-    bad, counts, slowest = run(a.n, a.seed, a.time_limit, a.nodes, log=print)
+    bad, counts, slowest = run(a.n, a.seed, a.time_limit, a.nodes,
+                               log=lambda m: print(m, flush=True), compare=a.compare,
+                               every=a.every)
     print(f"{a.n} geometries in {time.perf_counter() - t0:.0f} s: {counts}; slowest "
           f"{slowest:.1f} s (limit {a.time_limit} s); {len(bad)} with problems")
     for kw, problems in bad[:20]:

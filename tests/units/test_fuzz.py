@@ -18,3 +18,9 @@ def test_random_geometries_over_the_valid_domain():
     assert sum(counts.values()) == 300
     assert counts.get("ok", 0) >= 30, counts  # the sweep does reach bistable units
     assert slowest < 1.0 + 30.0
+
+
+def test_a_sample_at_two_resolutions_has_no_flag_flips_and_no_monostable_cut_path():
+    bad, counts, _ = run(4, seed=3, time_limit=5.0, nodes=41, compare=81)
+    assert not bad, bad[:3]
+    assert sum(v for k, v in counts.items() if " / " not in k) == 4

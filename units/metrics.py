@@ -1,0 +1,197 @@
+"""The load-bearing metrics of a unit (issue 23): the snap path's most negative force, the
+snap-back load and stiffness of the released state (iii), and the sheet's surface strain.
+
+Small numeric kernels (`surface_strain`, `largest_strain`, `strain_place`, `apex_stiffness`)
+and one driver, `snap_back`, which pushes the released unit's apex back up (+z) from state
+(iii) with its base on the rig's rollers and returns the force peak. SI units: N, m, N/m;
+strains dimensionless.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from snapmorph.solver.problem import ConvergenceError, load_unit, load_vector, make_control, state_from
+
+NAN = float("nan")
+UP = (0.0, 1.0)  # the snap-back push: from the other side, away from the base
+
+
+# ---------------------------------------------------------------------------- strain
+def surface_strain(P, X, t):
+    """(..., n) the largest surface strain of a planar rod at each node: |eps| + |kappa -
+    kappa_bar| t / 2, with eps the axial strain (the mean of the node's edges'), kappa the
+    DER curvature 2 tan(phi / 2) / l (phi the turning angle at the node, l its Voronoi
+    length in the stress-free rod) and kappa_bar its stress-free value. ``P``: (..., n, 2)
+    deformed node positions along the rod (several states at once), ``X``: (n, 2)
+    stress-free ones (m); ``t``: thickness (m). The two faces carry eps +- dkappa t / 2; the
+    larger magnitude is this sum. End nodes: eps only."""
+    P, X = np.asarray(P, float), np.asarray(X, float)
+    e, e0 = np.diff(P, axis=-2), np.diff(X, axis=-2)
+    ell, ell0 = np.hypot(e[..., 0], e[..., 1]), np.hypot(e0[:, 0], e0[:, 1])
+    eps_edge = ell / ell0 - 1.0
+    eps = np.empty(P.shape[:-1])
+    eps[..., 0], eps[..., -1] = eps_edge[..., 0], eps_edge[..., -1]
+    eps[..., 1:-1] = 0.5 * (eps_edge[..., :-1] + eps_edge[..., 1:])
+    bend = np.zeros(P.shape[:-1])
+    if P.shape[-2] > 2:
+        voronoi = 0.5 * (ell0[:-1] + ell0[1:])
+        bend[..., 1:-1] = np.abs(_curvature(e, ell) - _curvature(e0, ell0)) / voronoi * (0.5 * t)
+    return np.abs(eps) + bend
+
+
+def _curvature(e, ell):
+    """Integrated DER curvature 2 tan(phi / 2) at the interior nodes of edges ``e`` (..., m,
+    2) of lengths ``ell`` (signed, phi the turning angle from one edge to the next)."""
+    a, b = e[..., :-1, :], e[..., 1:, :]
+    cross = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    dot = a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
+    # tan(phi / 2) = sin(phi) / (1 + cos(phi)) = cross / (|a||b| + dot)
+    return 2.0 * cross / (ell[..., :-1] * ell[..., 1:] + dot)
+
+
+def largest_strain(positions, X, rods, t):
+    """(strain, rod name, node index into the rod, state index, per-state maxima (K,)) of
+    the largest surface strain (`surface_strain`) of the states ``positions`` ((K, n_nodes,
+    2), or one state (n_nodes, 2)); ``rods``: {name: node indices along the rod}. Of nodes
+    within 1e-9 of the largest (mirror images in a symmetric state) the one with the
+    smallest stress-free x is named, so that round-off does not pick the side."""
+    P = np.asarray(positions, float)
+    P = P[None] if P.ndim == 2 else P
+    per_rod = {name: surface_strain(P[:, nodes], X[nodes], t) for name, nodes in rods.items()}
+    series = np.max([s.max(axis=1) for s in per_rod.values()], axis=0)
+    state = int(np.argmax(series))
+    top = float(series[state])
+    best = None
+    for name, s in per_rod.items():
+        for k in np.flatnonzero(s[state] >= top * (1.0 - 1e-9)):
+            x = float(X[rods[name][k], 0])
+            if best is None or x < best[0]:
+                best = (x, name, int(k))
+    return top, best[1], best[2], state, series
+
+
+def strain_place(rod, x, L) -> str:
+    """Where a point at stress-free abscissa ``x`` (m) of rod ``rod`` ("arch" or "base")
+    sits, in words: its rod and "apex" ("middle" on the base), "left end", "right end",
+    "left flank" or "right flank" (thirds of L, the apex within L / 10), with x / L."""
+    f = x / L
+    if abs(f - 0.5) <= 0.1:
+        part = "apex" if rod == "arch" else "middle"
+    elif f < 1.0 / 3.0 or f > 2.0 / 3.0:
+        part = "left end" if f < 0.5 else "right end"
+    else:
+        part = "left flank" if f < 0.5 else "right flank"
+    return f"{rod}, {part} (x = {f:.3f} L)"
+
+
+# ---------------------------------------------------------------------------- F_min
+class _Negated:
+    """A displacement probe whose forces are negated (a minimum of F is a maximum of -F)."""
+
+    def __init__(self, probe):
+        self.probe = probe
+
+    def solve(self, guess, d):
+        pos, F, neg = self.probe.solve(guess, d)
+        return pos, -F, neg
+
+    @property
+    def last_state(self):
+        return self.probe.last_state
+
+    @last_state.setter
+    def last_state(self, q):
+        self.probe.last_state = q
+
+
+def most_negative_force(probe, d, F, Q, i_pk, end, failures, tol=2e-3):
+    """(F_min N, d_Fmin m) of the snap path: the most negative F of the samples after the
+    peak ``i_pk`` up to sample ``end`` (inclusive), refined by displacement-controlled
+    solves where the path is monotone in d around it (`push_through.refine_peak` on -F,
+    ``tol`` its bracket as a fraction of the samples' spacing);
+    (NaN, NaN) when F does not fall below zero there."""
+    from snapmorph.units.push_through import refine_peak
+
+    if i_pk is None:
+        return NAN, NAN
+    seg = np.asarray(F[i_pk:end + 1], float)
+    m = i_pk + int(np.argmin(seg))
+    if not F[m] < 0.0:
+        return NAN, NAN
+    if 0 < m < len(F) - 1:
+        neg_F = -np.asarray(F, float)
+        F_max, d_max, _ = refine_peak(None if probe is None else _Negated(probe), d, neg_F,
+                                      Q, m, failures, tol)
+        return -F_max, d_max
+    return float(F[m]), float(d[m])
+
+
+# ---------------------------------------------------------------------------- stiffness
+def apex_stiffness(structure, state, node, direction=UP, system=None) -> float:
+    """Tangent stiffness (N/m) of ``structure`` at equilibrium ``state`` against a force on
+    ``node`` along ``direction``: 1 / (e^T K^-1 e), e the unit load. NaN when K is
+    singular."""
+    length, fscale = structure.scales()
+    control = make_control(structure, node, direction, 1e-3 * length, "mgdc")
+    system = structure.reduced_system() if system is None else system
+    system.evaluate(state_from(structure, state))
+    if not system.factor():
+        return NAN
+    unit = load_unit(fscale)  # the load scaled as the drivers do: no underflow
+    P = load_vector(system, control) * unit
+    flexibility = float(P @ system.solve(P))
+    return unit * unit / flexibility if flexibility != 0.0 else NAN
+
+
+# ---------------------------------------------------------------------------- snap-back
+def snap_back(model, released, distance, steps=60, deadline_options=None, failures=()):
+    """The snap-back load of a released unit: its base on the rollers (``model``: the unit
+    built without the actuator, rollers on, its base middle held in x), state (iii)
+    ``released`` (positions, actuator and supports removed) placed on the rollers, the apex
+    pushed up (+z) by MGDC over ``distance`` (m) until F has passed its first maximum.
+    Returns (F_back N, d at it m, stiffness N/m at the start, the path); F_back NaN when F
+    has no maximum on the push (a failure of the path included)."""
+    from snapmorph.units.push_through import first_peak, refine_peak
+    from snapmorph.solver.states import DisplacementProbe
+
+    st = model.structure
+    start = on_rollers(released, model.supports, st.reference_positions)
+    start, _ = st.solve_equilibrium(start, node=None)
+    stiffness = apex_stiffness(st, start, model.apex, UP)
+
+    def past_peak(rows):
+        return first_peak(rows["F"]) is not None
+
+    options = dict(deadline_options or {})
+    path = st.push(model.apex, UP, _reach(st, start, model.apex, distance), start=start,
+                   steps=steps, stop=past_peak, critical=False, **options)
+    d, F = np.asarray(path.displacement), np.asarray(path.force)
+    i = first_peak(F)
+    if i is None:
+        return NAN, NAN, stiffness, path
+    probe = DisplacementProbe(st, model.apex, UP)
+    F_back, d_back, _ = refine_peak(probe, d, F, np.asarray(path.positions), i,
+                                    (ConvergenceError, *failures))
+    return F_back, d_back, stiffness, path
+
+
+def _reach(st, start, node, distance):
+    """The push's distance, counted as the drivers count it: from the stress-free state."""
+    X = st.reference_positions
+    return float(np.asarray(start)[node, 1] - X[node, 1]) + distance
+
+
+def on_rollers(positions, rollers, X):
+    """``positions`` moved rigidly so that both roller nodes lie on z = 0 and their midpoint
+    at its stress-free x (the released state, which is free of the rig, put back on it)."""
+    P = np.asarray(positions, float)
+    a, b = P[rollers[0]], P[rollers[1]]
+    angle = -np.arctan2(b[1] - a[1], b[0] - a[0])
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.array([[c, -s], [s, c]])
+    out = (P - a) @ R.T
+    mid = 0.5 * (X[rollers[0], 0] + X[rollers[1], 0])
+    out[:, 0] += mid - 0.5 * (out[rollers[0], 0] + out[rollers[1], 0])
+    out[:, 1] -= out[rollers[0], 1]
+    return out
