@@ -11,6 +11,8 @@ base as a `Chain`.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -67,16 +69,15 @@ class StateMap:
 
 def check_b(b) -> float:
     """``b`` (extra flat length of the arch ends, m) as a float >= 0, or ValueError naming it."""
-    if isinstance(b, (bool, str, bytes)):
-        raise ValueError(f"b (extra flat length of the arch ends, m) must be a number >= 0; got {b!r}")
-    try:
-        value = float(b)
-    except (TypeError, ValueError):
-        raise ValueError(f"b (extra flat length of the arch ends, m) must be a number >= 0; "
-                         f"got {b!r}") from None
-    if not (np.isfinite(value) and value >= 0):
-        raise ValueError(f"b (extra flat length of the arch ends, m) must be finite and >= 0; "
-                         f"got {b!r}")
+    value = math.nan
+    if not isinstance(b, (bool, str, bytes)):
+        try:
+            value = float(b)
+        except (TypeError, ValueError):
+            pass
+    if not (math.isfinite(value) and value >= 0):
+        raise ValueError(f"b (extra flat length of the arch ends, m) must be a finite number "
+                         f">= 0; got {b!r}")
     return value
 
 

@@ -107,8 +107,8 @@ PLACEMENT_PREFIX = "# placement"
 
 
 def write_units_csv(units, path, placement=None) -> Path:
-    """Write `units.csv` (columns unit, L_mm, h_mm, t_mm, w_mm, side, b_mm; unit numbered
-    from 1; b_mm is 0 for a spacer).
+    """Write `units.csv` (columns unit, L_mm, h_mm, t_mm, w_mm, side, and b_mm when an arched
+    unit has flat ends b > 0 (0 for a spacer); unit numbered from 1).
 
     `placement`: optional ``(x0_m, y0_m, angle_rad)``, the start point and start tangent of
     unit 1 in the target's frame (a design's frame). It is written as a first comment line
@@ -126,10 +126,13 @@ def write_units_csv(units, path, placement=None) -> Path:
         if header:
             fh.write(header + "\n")
         writer = csv.writer(fh)
-        writer.writerow((*CSV_COLUMNS, *OPTIONAL_COLUMNS))
+        # b_mm only when it says something: a file without it reads as b = 0 (or b/L of the
+        # reader's map), which is what the files of b = 0 designs always said
+        with_b = any(u.b > 0 and not u.is_spacer for u in units)
+        writer.writerow((*CSV_COLUMNS, *(OPTIONAL_COLUMNS if with_b else ())))
         for i, u in enumerate(units, start=1):
-            writer.writerow([i, _mm(u.L), _mm(u.h), _mm(u.t), _mm(u.w), u.side,
-                             _mm(0.0 if u.is_spacer else u.b)])
+            row = [i, _mm(u.L), _mm(u.h), _mm(u.t), _mm(u.w), u.side]
+            writer.writerow(row + ([_mm(0.0 if u.is_spacer else u.b)] if with_b else []))
     return path
 
 
