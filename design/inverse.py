@@ -16,6 +16,7 @@ placement; `verify_design` simulates the designed array as a whole).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -25,7 +26,7 @@ from snapmorph.design.biarcs import biarcs, sample_arcs
 from snapmorph.design.curve_fit import curve_design
 from snapmorph.design.inverse_result import Design
 from snapmorph.design.lookup import MapLookup
-from snapmorph.design.map_model import StateMap, map_state_kw
+from snapmorph.design.map_model import StateMap, map_at_b, map_state_kw
 from snapmorph.design.target_io import TargetFile, target_file_of
 from snapmorph.design.targets import Target, arc_length, check_points
 from snapmorph.design.targets_frame import DrawingFrame
@@ -47,7 +48,7 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
                    state: str = "released", max_units: int = 40,
                    theta_convention: str = "ours", verify: bool = False,
                    progress=None, material=None, orientation=None, max_strain=None,
-                   min_backload=None) -> Design:
+                   min_backload=None, b: float | None = None) -> Design:
     """Design an array whose all-snapped base matches a target within `tol` (SI units).
 
     points: the target: (N, 2) points in m in any orientation (N >= 2; a smooth parametric
@@ -99,6 +100,10 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
         `min_backload` (N), and no parts may overlap (`design.unit_margins.verify_loads`);
         when not, `met` is False, `verification_failure` and `load_check` say why, and a
         UserWarning is given.
+    b: extra flat length of every arched unit's ends, m (the paper's specimens: b = w); the
+        map is read at b/L = b / L of each unit (it needs a b/L axis, unless b is 0 on a map
+        built at b/L = 0). None: today's behaviour, the map's own b/L (0 on the committed
+        maps), every unit's b = that b/L times its L.
     """
     import warnings
 
@@ -131,6 +136,8 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
         if tangents is None:
             tangents = source.tangents
     raw = design_map if design_map is not None else _default_dm()
+    if b is not None:
+        raw = map_at_b(raw, b, w)
     state_kw, state_used = map_state_kw(raw, state)
     paper = theta_convention == "paper"
     dm = StateMap(raw, state_kw)
@@ -188,6 +195,8 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
                               placement, L_range, hL_range, min_barrier, state, max_units,
                               lookup, progress=tick)
         design.points = target.points
+    if b is not None:
+        design.units = [u if u.is_spacer else replace(u, b=float(b)) for u in design.units]
     design.tol_rel, design.tol_abs = tol, tol_abs
     design.source = source if source is not None else TargetFile(
         np.asarray(points, dtype=float), None, DrawingFrame("csv"), source="points")

@@ -83,9 +83,15 @@ class MapLookup:
     # --- map metadata -----------------------------------------------------------------------
     @property
     def b_over_L(self) -> float:
-        """The b/L the map was built at (0 when the map does not say)."""
+        """The b/L the map answers at when a lookup names none: the one it was built at (0
+        when the map does not say; 0 on a map with a b/L axis, `maps.DEFAULT_B_OVER_L`)."""
         value = _attrs(self.dm).get("b_over_L", 0.0)
         return float(value)
+
+    @property
+    def has_b_axis(self) -> bool:
+        """Whether the map interpolates in b/L (a lookup may then name any b/L in its range)."""
+        return "b_over_L" in tuple(getattr(self.dm, "dims", ()))
 
     def grid(self, name: str):
         """The coordinate values of `name` (h_over_L, t_over_L, w_over_L) or None if unknown."""
@@ -116,10 +122,13 @@ class MapLookup:
         return {} if state is None else {"state": state}
 
     # --- lookups ----------------------------------------------------------------------------
-    def theta_S(self, h_over_L: float, t_over_L: float, w_over_L: float, state=None):
+    def theta_S(self, h_over_L: float, t_over_L: float, w_over_L: float, state=None,
+                b_over_L=None):
         """(θ in degrees, S/L) of the snapped unit in ``state``; ValueError outside the map or
-        if not bistable there (for the released state: if the released unit is not)."""
-        return self._scalar(_r(h_over_L), _r(t_over_L), _r(w_over_L), self._st(state))[:2]
+        if not bistable there (for the released state: if the released unit is not).
+        ``b_over_L``: None for the map's own (`b_over_L`), else a map with a b/L axis."""
+        return self._scalar(_r(h_over_L), _r(t_over_L), _r(w_over_L), self._st(state),
+                            _rb(b_over_L))[:2]
 
     def theta_end(self, h_over_L: float, t_over_L: float, w_over_L: float, state=None) -> float:
         """θ_end in degrees (angle between the base's start tangent and its chord, θ/2 for a
@@ -131,9 +140,10 @@ class MapLookup:
         return value
 
     def base_shape(self, h_over_L: float, t_over_L: float, w_over_L: float,
-                   state=None) -> np.ndarray:
+                   state=None, b_over_L=None) -> np.ndarray:
         """Snapped base shape per unit length, (M, 2), from (0, 0) heading +x, arch side +z."""
-        return self._shape(_r(h_over_L), _r(t_over_L), _r(w_over_L), self._st(state))
+        return self._shape(_r(h_over_L), _r(t_over_L), _r(w_over_L), self._st(state),
+                           _rb(b_over_L))
 
     def h_over_L_for_theta(self, theta_deg: float, t_over_L: float, w_over_L: float,
                            state=None, angle: str = "theta") -> float:
@@ -163,9 +173,9 @@ class MapLookup:
         return self._range(_r(t_over_L, 5), _r(w_over_L, 5), self._st(state))
 
     # --- uncached implementations -----------------------------------------------------------
-    def _scalar_uncached(self, h, t, w, state):
+    def _scalar_uncached(self, h, t, w, state, b=None):
         try:
-            res = self.dm.at(h_over_L=h, t_over_L=t, w_over_L=w, **self._kw(state))
+            res = self.dm.at(h_over_L=h, t_over_L=t, w_over_L=w, **self._kw(state), **_kw_b(b))
         except (ValueError, KeyError, IndexError) as exc:
             raise ValueError(f"unit h/L = {h:.4g}, t/L = {t:.4g}, w/L = {w:.4g}: {exc}") from None
         theta, S = _get(res, "theta"), _get(res, "S")
@@ -178,9 +188,10 @@ class MapLookup:
                              f"in the design map ({state or 'released'} state)")
         return theta, S, theta_end
 
-    def _shape_uncached(self, h, t, w, state):
+    def _shape_uncached(self, h, t, w, state, b=None):
         try:
-            xy = self.dm.base_shape(h_over_L=h, t_over_L=t, w_over_L=w, **self._kw(state))
+            xy = self.dm.base_shape(h_over_L=h, t_over_L=t, w_over_L=w, **self._kw(state),
+                                    **_kw_b(b))
         except (ValueError, KeyError, IndexError) as exc:
             raise ValueError(f"unit h/L = {h:.4g}, t/L = {t:.4g}, w/L = {w:.4g}: {exc}") from None
         xy = np.array(np.asarray(xy, dtype=float), copy=True)
@@ -255,6 +266,16 @@ class MapLookup:
 def _r(x, digits=12):
     """Round a key for caching (12 significant digits: no effect on the numbers)."""
     return float(f"{float(x):.{digits}g}")
+
+
+def _rb(b):
+    """A b/L cache key: None (the map's own b/L) or the rounded value."""
+    return None if b is None else _r(b)
+
+
+def _kw_b(b) -> dict:
+    """The map keyword of a lookup's b/L (none for the map's own)."""
+    return {} if b is None else {"b_over_L": b}
 
 
 def _get(res, name) -> float:

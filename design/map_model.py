@@ -1,13 +1,17 @@
 """The design map as inverse design sees it: in one unit state, and vectorised.
 
 `StateMap` hands every lookup the unit state (released or actuated) and, with the paper's angle
-convention, answers h/L for θ by the map's theta_end = θ/2. `FastModel` computes the
+convention, answers h/L for θ by the map's theta_end = θ/2. `map_at_b` hands every lookup the
+b/L of units with flat ends b (m) and strip width w (m): b/L = (b / w) w/L, a function of the
+query's w/L alone, so that the callers (which know only h/L, t/L, w/L) need not change. `FastModel` computes the
 all-snapped base of a sequence of units straight from the map's interpolants, vectorised over
 a batch of parameter sets (the numbers of `design.kinematics.chain`); `chain_fast` is one such
 base as a `Chain`.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -61,6 +65,66 @@ class StateMap:
             return self._dm.h_over_L_for_theta_end(np.asarray(theta_deg, float) / 2.0,
                                                    t_over_L, w_over_L, **kw)
         return self.__getattr__("h_over_L_for_theta")(theta_deg, t_over_L, w_over_L, **kw)
+
+
+def check_b(b) -> float:
+    """``b`` (extra flat length of the arch ends, m) as a float >= 0, or ValueError naming it."""
+    value = math.nan
+    if not isinstance(b, (bool, str, bytes)):
+        try:
+            value = float(b)
+        except (TypeError, ValueError):
+            pass
+    if not (math.isfinite(value) and value >= 0):
+        raise ValueError(f"b (extra flat length of the arch ends, m) must be a finite number "
+                         f">= 0; got {b!r}")
+    return value
+
+
+def map_at_b(dm, b: float, w: float):
+    """The design map `dm` seen by units of flat-end length ``b`` and strip width ``w`` (m):
+    every lookup gets ``b_over_L = (b / w) w_over_L``. A map without a b/L axis (its
+    ``fixed_b_over_L``) is returned as it is when its b/L is that of every such unit (b = 0 on
+    a b/L = 0 map); otherwise ValueError naming b and the map's b/L."""
+    b = check_b(b)
+    fixed = getattr(dm, "fixed_b_over_L", None)
+    has_axis = "b_over_L" in tuple(getattr(dm, "dims", ()))
+    if not has_axis:
+        fixed = 0.0 if fixed is None else float(fixed)
+        if b == 0.0 and fixed == 0.0:
+            return dm
+        where = getattr(dm, "path", None) or "the design map"
+        raise ValueError(f"b = {b * 1e3:.6g} mm (extra flat length of the arch ends): {where} has "
+                         f"no b/L axis (it was built at the one b/L = {fixed:g}); leave b out, or "
+                         f"use a map with a b/L axis (schema 3, `make maps`)")
+    return BMap(dm, b / w)
+
+
+class BMap:
+    """A design map whose lookups get ``b_over_L = b_over_w * w_over_L`` (see `map_at_b`);
+    everything else is the wrapped map's."""
+
+    #: method -> position of its w/L argument
+    _W_AT = {"at": 2, "value": 3, "base_shape": 2, "force_newtons": 2, "h_over_L_for_theta": 2,
+             "h_over_L_for_theta_end": 2, "theta_range": 1, "bistable_boundary": 1}
+
+    def __init__(self, dm, b_over_w: float):
+        self._dm, self.b_over_w = dm, float(b_over_w)
+
+    def __getattr__(self, name):
+        import functools
+
+        attr = getattr(self._dm, name)
+        pos = self._W_AT.get(name)
+        if pos is None or not callable(attr):
+            return attr
+
+        @functools.wraps(attr)
+        def call(*args, **kw):
+            w = kw["w_over_L"] if "w_over_L" in kw else args[pos]
+            kw.setdefault("b_over_L", self.b_over_w * np.asarray(w, dtype=float))
+            return attr(*args, **kw)
+        return call
 
 
 def chain_fast(units, dm, state_kw, start=(0.0, 0.0), angle: float = 0.0):

@@ -50,10 +50,11 @@ def snapped_shape(unit: Unit, source: str = "map", lookup: MapLookup | None = No
         return straight(unit.L)
     if source == "map":
         lookup = lookup or MapLookup()
-        _check_b(unit, lookup)
+        bL = _check_b(unit, lookup)
         hL, tL, wL = unit.h / unit.L, unit.t / unit.L, unit.w / unit.L
-        theta, S = lookup.theta_S(hL, tL, wL, state=state)
-        xy = conform(np.array(lookup.base_shape(hL, tL, wL, state=state)), theta, S) * unit.L
+        theta, S = lookup.theta_S(hL, tL, wL, state=state, b_over_L=bL)
+        xy = conform(np.array(lookup.base_shape(hL, tL, wL, state=state, b_over_L=bL)),
+                     theta, S) * unit.L
     elif source == "simulate":
         xy, theta = _simulated(unit.L, unit.h, unit.t, unit.w, unit.b, float(E), nodes,
                                state or "released")
@@ -127,7 +128,11 @@ def _simulated(L, h, t, w, b, E, nodes, state="released"):
     return xy, float(theta)
 
 
-def _check_b(unit: Unit, lookup: MapLookup) -> None:
+def _check_b(unit: Unit, lookup: MapLookup):
+    """The b/L to look the unit up at: its own on a map with a b/L axis, else None (the map's
+    own, which must be the unit's)."""
+    if lookup.has_b_axis:
+        return unit.b / unit.L
     b_map = lookup.b_over_L
     if abs(unit.b / unit.L - b_map) > 1e-6:
         raise ValueError(

@@ -20,6 +20,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 CSV_COLUMNS = ("unit", "L_mm", "h_mm", "t_mm", "w_mm", "side")
+#: optional columns: b_mm, the extra flat length of an arch's ends (written by
+#: `write_units_csv`; a file without it gets b = b_over_L L)
+OPTIONAL_COLUMNS = ("b_mm",)
 
 
 @dataclass(frozen=True)
@@ -104,7 +107,8 @@ PLACEMENT_PREFIX = "# placement"
 
 
 def write_units_csv(units, path, placement=None) -> Path:
-    """Write `units.csv` (columns unit, L_mm, h_mm, t_mm, w_mm, side; unit numbered from 1).
+    """Write `units.csv` (columns unit, L_mm, h_mm, t_mm, w_mm, side, and b_mm when an arched
+    unit has flat ends b > 0 (0 for a spacer); unit numbered from 1).
 
     `placement`: optional ``(x0_m, y0_m, angle_rad)``, the start point and start tangent of
     unit 1 in the target's frame (a design's frame). It is written as a first comment line
@@ -122,9 +126,13 @@ def write_units_csv(units, path, placement=None) -> Path:
         if header:
             fh.write(header + "\n")
         writer = csv.writer(fh)
-        writer.writerow(CSV_COLUMNS)
+        # b_mm only when it says something: a file without it reads as b = 0 (or b/L of the
+        # reader's map), which is what the files of b = 0 designs always said
+        with_b = any(u.b > 0 and not u.is_spacer for u in units)
+        writer.writerow((*CSV_COLUMNS, *(OPTIONAL_COLUMNS if with_b else ())))
         for i, u in enumerate(units, start=1):
-            writer.writerow([i, _mm(u.L), _mm(u.h), _mm(u.t), _mm(u.w), u.side])
+            row = [i, _mm(u.L), _mm(u.h), _mm(u.t), _mm(u.w), u.side]
+            writer.writerow(row + ([_mm(0.0 if u.is_spacer else u.b)] if with_b else []))
     return path
 
 
@@ -173,7 +181,8 @@ def read_placement(path):
 
 
 def read_units_csv(path, b_over_L: float = 0.0) -> list[Unit]:
-    """Read `units.csv`; b (not a column) is set to b_over_L * L for arched units.
+    """Read `units.csv`. An arched unit's b is its row's b_mm when the file has that column
+    (`write_units_csv` writes it), else b_over_L * L; a spacer's b is 0.
 
     Lines starting with ``#`` (e.g. the placement line) are skipped. A spacer is a row with
     ``h_mm = 0`` and ``side = 0``; an arched unit has ``h_mm > 0`` and ``side`` +1 or -1.
@@ -243,11 +252,27 @@ def read_units_csv(path, b_over_L: float = 0.0) -> list[Unit]:
             raise ValueError(f"{path}, line {n}: side = 0 marks a spacer, whose h_mm must be 0; "
                              f"got h_mm = {rec['h_mm']} (give side 1 or -1 for an arched unit)")
         L, h, t, w = (mm[c] * 1e-3 for c in ("L_mm", "h_mm", "t_mm", "w_mm"))
+        b = b_over_L * L
+        if "b_mm" in rec:
+            b = _b_mm(rec["b_mm"], path, n)
         try:
-            units.append(Unit(L=L, h=h, t=t, w=w, side=side, b=b_over_L * L if h > 0 else 0.0))
+            units.append(Unit(L=L, h=h, t=t, w=w, side=side, b=b if h > 0 else 0.0))
         except ValueError as exc:
             raise ValueError(f"{path}, line {n}: {exc}") from None
     return units
+
+
+def _b_mm(text: str, path, n: int) -> float:
+    """A row's b_mm (extra flat length of the arch ends, mm >= 0) in m."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise ValueError(f"{path}, line {n}: not a number in b_mm (the extra flat length of the "
+                         f"arch ends, mm, >= 0): {text!r}") from None
+    if not (math.isfinite(v) and v >= 0):
+        raise ValueError(f"{path}, line {n}: b_mm (the extra flat length of the arch ends) must "
+                         f"be finite and >= 0 mm; got {text!r}")
+    return v * 1e-3
 
 
 def _mm(x: float) -> str:

@@ -1,8 +1,10 @@
-"""`DesignMap`: load a design map (schema 2, or 1 read-only) and look values up by interpolation.
+"""`DesignMap`: load a design map (schema 3 or 2, or 1 read-only) and look values up by
+interpolation.
 
 Interpolation is piecewise linear on the grid cell around the query (scipy
-`RegularGridInterpolator`), in the coordinates (h/L, log t/L, log w/L), and of log(F_cr) for the
-force (F_cr varies like a power of t and w, so that is nearly linear). Every variable has a
+`RegularGridInterpolator`), in the coordinates (h/L, log t/L, log w/L, b/L) of a schema-3 map
+((h/L, log t/L, log w/L) of a map at one fixed b/L: every lookup takes ``b_over_L=``, which
+must then be left out or equal that value), and of log(F_cr) for the force (F_cr varies like a power of t and w, so that is nearly linear). Every variable has a
 validity mask: S, theta, d_unstable, d_second, the energies and the base shape exist only at
 bistable points (status ok); F_cr and d_cr also at monostable ones. A query whose cell gives
 weight to an invalid grid point raises `MapDomainError` (or returns NaN with allow_nan=True):
@@ -13,10 +15,18 @@ States: every lookup of S, theta, theta_end and the base shape takes ``state=``:
 defined where the released unit is still bistable, self_standing = 1) or "actuated" (state
 (iii) with the actuator still glued, the paper's definition). A schema-1 map has no released
 state: it loads with a warning and answers only ``state="actuated"``.
+
+The unit metrics of schema 3 (F_min, d_Fmin, strain_max, F_back, stiffness_released,
+strain_max_released, `maps.schema.METRIC_VARS`) each have their own validity (finite at a
+point with a force peak, or at a self-standing one for the released ones); `at` returns them
+NaN where undefined (never an error: the shape lookups do not depend on them), `value` raises
+like for any other variable. ``strain_where`` comes back as the common text of the cell's grid
+points ("" when they differ).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 from pathlib import Path
@@ -24,19 +34,26 @@ from pathlib import Path
 import numpy as np
 
 from snapmorph.maps.schema import (
-    BISTABLE_ONLY, FLAG_VARS, FORCE_STATUSES, GRID_DIMS, OK_STATUS, PENDING_STATUS,
-    READABLE_VERSIONS, RELEASED_VARS, REQUIRED_ATTRS, REQUIRED_VARS, REQUIRED_VARS_V1,
-    SCHEMA_VERSION, STATES, status_names,
+    B_DIM, BISTABLE_ONLY, FLAG_VARS, FORCE_STATUSES, GRID_DIMS, GRID_DIMS_B, METRIC_VARS,
+    OK_STATUS, PATH_METRICS, PENDING_STATUS, READABLE_VERSIONS, RELEASED_VARS, REQUIRED_ATTRS,
+    REQUIRED_ATTRS_V3, REQUIRED_VARS, REQUIRED_VARS_V1, REQUIRED_VARS_V3, SCHEMA_VERSION, STATES,
+    TEXT_VARS, status_names,
 )
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 DEFAULT_MAP = DATA_DIR / "default.nc"
 CI_MAP = DATA_DIR / "ci.nc"
+#: the three-axis default map (schema 2, b/L = 0) that the map with a b/L axis replaced, kept
+#: to say how much every value moved at its points (tests/maps/test_maps_reference.py)
+REFERENCE_MAP = DATA_DIR / "reference" / "default-schema2.nc"
 
 _F_VARS = ("F_cr", "d_cr")  # exist at bistable and monostable points
 _LOG_VARS = ("F_cr",)  # interpolated as log(value)
 _W_TOL = 1e-9  # a grid point with interpolation weight below this is not "touched"
 _R_TOL = 1e-12  # relative tolerance on the grid bounds
+_B_TOL = 1e-12  # a b/L this close to a fixed-b map's own is that b/L
+#: the b/L of a lookup on a schema-3 map that gives none: that of the maps before schema 3
+DEFAULT_B_OVER_L = 0.0
 
 
 class MapFileError(ValueError):
@@ -69,6 +86,7 @@ def check_state(state) -> str:
 _MEANING = {"h_over_L": "arch apex height over base length, dimensionless",
             "t_over_L": "sheet thickness over base length, dimensionless",
             "w_over_L": "strip width over base length, dimensionless",
+            "b_over_L": "extra flat length of the arch ends over base length, dimensionless",
             "theta_deg": "signed turning angle theta, degrees",
             "theta_end_deg": "end angle theta_end (end tangent to chord), degrees"}
 
@@ -139,21 +157,25 @@ def _validate(ds, path) -> None:
     if version not in READABLE_VERSIONS:
         _fail(path, f"schema version {version} is not supported (this snapmorph reads "
                     f"{', '.join(map(str, READABLE_VERSIONS))})")
-    required = REQUIRED_VARS if version >= 2 else REQUIRED_VARS_V1
+    required = {1: REQUIRED_VARS_V1, 2: REQUIRED_VARS}.get(version, REQUIRED_VARS_V3)
     missing = [v for v in required if v not in ds.variables]
     if missing:
         _fail(path, f"missing variables {missing}")
-    missing = [a for a in REQUIRED_ATTRS if a not in ds.attrs]
+    dims = GRID_DIMS_B if version >= 3 and B_DIM in ds.dims else GRID_DIMS
+    missing = [a for a in (REQUIRED_ATTRS_V3 if B_DIM in dims else REQUIRED_ATTRS) if a not in ds.attrs]
     if missing:
         _fail(path, f"missing global attributes {missing}")
-    for name in required:
-        want = GRID_DIMS + (("sample", "xz") if name.startswith("base_shape") else ())
+    present = (*required, *(v for v in (*METRIC_VARS, *TEXT_VARS) if v in ds.variables))
+    for name in present:
+        want = dims + (("sample", "xz") if name.startswith("base_shape") else ())
         if ds[name].dims != want:
             _fail(path, f"variable {name} has dimensions {ds[name].dims}, expected {want}")
-    for dim in GRID_DIMS:
+    for dim in dims:
         c = np.asarray(ds[dim].values, dtype=float)
-        if c.size < 2 or not np.all(np.isfinite(c)) or np.any(np.diff(c) <= 0) or c[0] <= 0:
-            _fail(path, f"coordinate {dim} must hold >= 2 positive, strictly increasing values")
+        low_ok = c[0] >= 0 if dim == B_DIM else c[0] > 0
+        if c.size < 2 or not np.all(np.isfinite(c)) or np.any(np.diff(c) <= 0) or not low_ok:
+            _fail(path, f"coordinate {dim} must hold >= 2 " + ("non-negative" if dim == B_DIM else
+                        "positive") + ", strictly increasing values")
     if ds.sizes["xz"] != 2:
         _fail(path, f"dimension xz has size {ds.sizes['xz']}, expected 2")
     if not np.issubdtype(ds["status"].dtype, np.integer):
@@ -181,7 +203,9 @@ class DesignMap:
     """An interpolated design map. Use `DesignMap.load(path=None)`.
 
     Every length is over the base length L; `F_cr` is F_cr L^2 / (E I_arch) with
-    I_arch = w t^3 / 12; `theta` and `theta_end` are in degrees. S, theta, theta_end and the
+    I_arch = w t^3 / 12; `theta` and `theta_end` are in degrees. Every lookup takes
+    ``b_over_L=`` (keyword): on a map with a b/L axis (`dims` ends with "b_over_L") None means
+    `DEFAULT_B_OVER_L` (0); on a map at one b/L (`fixed_b_over_L`) it must be None or that value. S, theta, theta_end and the
     base shape come from the released state (iii) unless ``state="actuated"``.
     `status_names` is {code: name} of the statuses the file declares (its ``status``
     ``flag_values`` / ``flag_meanings``).
@@ -201,9 +225,14 @@ class DesignMap:
                           f"`make maps` / `snapmorph maps build`", OldSchemaWarning, stacklevel=3)
         self.dataset = ds
         self.path = Path(path) if path is not None else None
-        self._axes = tuple(np.asarray(ds[d].values, dtype=float) for d in GRID_DIMS)
-        # interpolation coordinates: (h, log t, log w)
-        self._icoords = (self._axes[0], np.log(self._axes[1]), np.log(self._axes[2]))
+        self.dims = GRID_DIMS_B if self.schema_version >= 3 and B_DIM in ds.dims else GRID_DIMS
+        self._axes = tuple(np.asarray(ds[d].values, dtype=float) for d in self.dims)
+        # interpolation coordinates: (h, log t, log w[, b]); b/L starts at 0, so it stays linear
+        self._icoords = (self._axes[0], np.log(self._axes[1]), np.log(self._axes[2]),
+                         *self._axes[3:])
+        #: the b/L of a map at one fixed b/L (None for a map with a b/L axis)
+        self.fixed_b_over_L = (None if B_DIM in self.dims
+                               else float(ds.attrs.get("b_over_L", DEFAULT_B_OVER_L)))
         self._status = np.asarray(ds["status"].values)
         ok = np.isin(self._status, _codes(self.status_names, (OK_STATUS,)))
         standing = ok & (np.asarray(ds["self_standing"].values) == 1)
@@ -212,6 +241,11 @@ class DesignMap:
         groups = {"F": (list(_F_VARS), force), "bi": (bistable_vars, ok.copy())}
         if self.schema_version >= 2:
             groups["rel"] = (list(RELEASED_VARS), standing.copy())
+        # each unit metric on its own: one that the unit model does not report yet (NaN
+        # everywhere) leaves the others and the shapes alone
+        self.metrics = tuple(v for v in METRIC_VARS if v in ds.variables)
+        for name in self.metrics:
+            groups[name] = ([name], (force if name in PATH_METRICS else standing).copy())
         self._interp = {}
         self._group_of = {}
         for group, (names, valid) in groups.items():
@@ -249,6 +283,14 @@ class DesignMap:
         ind = [(np.asarray(ds[f].values) == v) for f in FLAG_VARS for v in (-1, 0, 1)]
         self._flag_rgi = RGI(self._icoords, np.stack(ind, axis=-1).astype(float), method="linear",
                              bounds_error=False, fill_value=np.nan)
+        # text consensus: the fraction of stencil weight on each text a variable holds
+        self._text_rgi = {}
+        for name in (v for v in TEXT_VARS if v in ds.variables):
+            text = np.asarray(ds[name].values).astype(str)
+            words = sorted(set(text.ravel().tolist()))
+            ind = np.stack([text == word for word in words], axis=-1).astype(float)
+            self._text_rgi[name] = (words, RGI(self._icoords, ind, method="linear",
+                                               bounds_error=False, fill_value=np.nan))
 
     @property
     def states(self) -> tuple:
@@ -305,9 +347,17 @@ class DesignMap:
         return self._axes[2].copy()
 
     @property
+    def b_over_L(self) -> np.ndarray:
+        """Grid values of b/L (one value for a map at a fixed b/L)."""
+        if self.fixed_b_over_L is not None:
+            return np.array([self.fixed_b_over_L])
+        return self._axes[3].copy()
+
+    @property
     def ranges(self) -> dict:
-        """{"h_over_L": (min, max), "t_over_L": ..., "w_over_L": ...}."""
-        return {d: (float(a[0]), float(a[-1])) for d, a in zip(GRID_DIMS, self._axes)}
+        """{"h_over_L": (min, max), "t_over_L": ..., "w_over_L": ...[, "b_over_L": ...]}: the
+        grid's axes (b/L only when it is one)."""
+        return {d: (float(a[0]), float(a[-1])) for d, a in zip(self.dims, self._axes)}
 
     @property
     def samples(self) -> int:
@@ -324,10 +374,29 @@ class DesignMap:
         return f"DesignMap({self.path or '<in memory>'}: {r})"
 
     # ---------------------------------------------------------------- lookup
-    def _points(self, h_over_L, t_over_L, w_over_L):
-        """Broadcast, range-check and transform queries; returns (shape, (n, 3) array)."""
-        h, t, w = _broadcast(h_over_L=h_over_L, t_over_L=t_over_L, w_over_L=w_over_L)
-        for name, v, axis in zip(GRID_DIMS, (h, t, w), self._axes):
+    def _b_query(self, b_over_L):
+        """The b/L of a query: the map's own when None; on a fixed-b map it must equal it."""
+        if b_over_L is None:
+            return DEFAULT_B_OVER_L if self.fixed_b_over_L is None else self.fixed_b_over_L
+        if self.fixed_b_over_L is None:
+            return b_over_L
+        b = _real_array(B_DIM, b_over_L)
+        fixed = self.fixed_b_over_L
+        bad = ~(np.abs(b - fixed) <= _B_TOL * max(1.0, abs(fixed)))
+        if np.any(bad):
+            raise MapDomainError(
+                f"b_over_L = {float(b[bad].ravel()[0])!r} is outside the map's range: it was built "
+                f"at the one value b_over_L = {fixed:g} (a map without a b/L axis, schema "
+                f"{self.schema_version}); leave b_over_L out or give {fixed:g}, or use a map with a "
+                f"b/L axis (`make maps`)" + (f" ({self.path})" if self.path else ""))
+        return fixed
+
+    def _points(self, h_over_L, t_over_L, w_over_L, b_over_L=None):
+        """Broadcast, range-check and transform queries; returns (shape, (n, ndim) array)."""
+        b_query = self._b_query(b_over_L)
+        h, t, w, b = _broadcast(h_over_L=h_over_L, t_over_L=t_over_L, w_over_L=w_over_L,
+                                b_over_L=b_query)
+        for name, v, axis in zip(self.dims, (h, t, w, b), self._axes):
             lo, hi = axis[0], axis[-1]
             tol = _R_TOL * (hi - lo)
             bad = ~((v >= lo - tol) & (v <= hi + tol))  # NaN queries are out of range too
@@ -335,11 +404,9 @@ class DesignMap:
                 raise MapDomainError(
                     f"{name} = {float(v[bad].ravel()[0])!r} is outside the map's range "
                     f"{lo:g} <= {name} <= {hi:g}" + (f" ({self.path})" if self.path else ""))
-        h = np.clip(h, self._axes[0][0], self._axes[0][-1])
-        t = np.clip(t, self._axes[1][0], self._axes[1][-1])
-        w = np.clip(w, self._axes[2][0], self._axes[2][-1])
-        x = np.column_stack([h.ravel(), np.log(t.ravel()), np.log(w.ravel())])
-        return h.shape, x
+        q = [np.clip(v, a[0], a[-1]) for v, a in zip((h, t, w, b), self._axes)]
+        cols = [q[0].ravel(), np.log(q[1].ravel()), np.log(q[2].ravel()), *(v.ravel() for v in q[3:])]
+        return h.shape, np.column_stack(cols)
 
     def _stencil_status(self, xq) -> str:
         """Status names of the grid points around one query (for error messages)."""
@@ -347,8 +414,12 @@ class DesignMap:
         for c, q in zip(self._icoords, xq):
             i = int(np.clip(np.searchsorted(c, q, side="right") - 1, 0, c.size - 2))
             idx.append((i, i + 1))
-        codes = {int(self._status[a, b, c]) for a in idx[0] for b in idx[1] for c in idx[2]}
+        codes = {int(self._status[k]) for k in itertools.product(*idx)}
         return ", ".join(self.status_names[c] for c in sorted(codes))
+
+    def _where_query(self, q) -> str:
+        where = f"h/L={q[0]:.6g}, t/L={math.exp(q[1]):.6g}, w/L={math.exp(q[2]):.6g}"
+        return where + (f", b/L={q[3]:.6g}" if len(q) > 3 else "")
 
     def _group(self, group, shape, x, allow_nan):
         names, rgi, bad_rgi, _ = self._interp[group]
@@ -362,8 +433,8 @@ class DesignMap:
             k = int(np.flatnonzero(bad)[0])
             q = x[k]
             raise MapDomainError(
-                f"{', '.join(names)} not defined at h/L={q[0]:.6g}, t/L={math.exp(q[1]):.6g}, "
-                f"w/L={math.exp(q[2]):.6g}: the interpolation cell touches grid points that are "
+                f"{', '.join(names)} not defined at {self._where_query(q)}: the interpolation "
+                f"cell touches grid points that are "
                 f"{self._stencil_status(q)} (only ok points count"
                 + ("; F_cr and d_cr also use monostable ones" if group == "F" else "")
                 + ("; the released state also needs self_standing = 1, a released unit that "
@@ -380,8 +451,9 @@ class DesignMap:
         return v[()] if isinstance(v, np.ndarray) and v.ndim == 0 else v
 
     def at(self, h_over_L, t_over_L, w_over_L, allow_nan: bool = False,
-           state: str = "released") -> dict:
-        """Interpolated values of every scalar variable at (h/L, t/L, w/L) (broadcast arrays).
+           state: str = "released", *, b_over_L=None) -> dict:
+        """Interpolated values of every scalar variable at (h/L, t/L, w/L, b/L) (broadcast
+        arrays; b_over_L None: 0 on a map with a b/L axis, the map's own on one without).
 
         Returns {name: value} for F_cr, d_cr, d_unstable, d_second, S, theta, theta_end,
         energy_barrier, energy_stored (floats, dimensionless, angles in degrees) and bistable,
@@ -389,10 +461,11 @@ class DesignMap:
         query, -1 if they differ). S, theta and theta_end are those of ``state``: "released"
         (default; defined where the released unit is still bistable) or "actuated". Raises
         MapDomainError outside the grid, or where a value is undefined (monostable/failed/not
-        self-standing grid points around the query) unless allow_nan=True.
+        self-standing grid points around the query) unless allow_nan=True. A map with the unit
+        metrics adds them (NaN where undefined, see the module docstring) and strain_where.
         """
         state = self._state(state)
-        shape, x = self._points(h_over_L, t_over_L, w_over_L)
+        shape, x = self._points(h_over_L, t_over_L, w_over_L, b_over_L)
         out = {**self._group("F", shape, x, allow_nan), **self._group("bi", shape, x, allow_nan)}
         if state == "released":
             rel = self._group("rel", shape, x, allow_nan)
@@ -405,21 +478,32 @@ class DesignMap:
             for k, v in enumerate((-1, 0, 1)):
                 val[f[:, k] >= 1.0 - _W_TOL] = v
             out[name] = val.reshape(shape)
-        return {name: self._scalar(out[name]) for name in self.SCALARS if name in out}
+        for name in self.metrics:
+            out[name] = self._group(name, shape, x, allow_nan=True)[name]
+        for name, (words, rgi) in self._text_rgi.items():
+            frac = rgi(x)
+            text = np.full(len(x), "", dtype=object)
+            for k, word in enumerate(words):
+                text[frac[:, k] >= 1.0 - _W_TOL] = word
+            out[name] = text.reshape(shape)
+        names = (*self.SCALARS, *self.metrics, *self._text_rgi)
+        return {name: self._scalar(out[name]) for name in names if name in out}
 
     def value(self, name: str, h_over_L, t_over_L, w_over_L, allow_nan: bool = False,
-              state: str = "released"):
+              state: str = "released", *, b_over_L=None):
         """One interpolated variable (see `at`); S, theta and theta_end of ``state``. The map's
-        own names (S_released, theta_released, theta_end_released) are accepted too."""
-        names = (*self.SCALARS, *RELEASED_VARS)
+        own names (S_released, theta_released, theta_end_released) are accepted too, and the
+        unit metrics (`maps.schema.METRIC_VARS`; MapDomainError where undefined)."""
+        names = (*self.SCALARS, *RELEASED_VARS, *METRIC_VARS)
         if name not in names:
             raise ValueError(f"name must be one of {names}, got {name!r}")
         state = self._state(state)
         if name in RELEASED_VARS:
             state = self._state("released")
-        shape, x = self._points(h_over_L, t_over_L, w_over_L)
+        shape, x = self._points(h_over_L, t_over_L, w_over_L, b_over_L)
         if name in FLAG_VARS:
-            return self.at(h_over_L, t_over_L, w_over_L, allow_nan=True, state="actuated")[name]
+            return self.at(h_over_L, t_over_L, w_over_L, allow_nan=True, state="actuated",
+                           b_over_L=b_over_L)[name]
         var = _STATE_VARS[state].get(name, name)
         if var not in self._group_of:
             raise MapDomainError(f"design map {self.path or '<in memory>'} (schema "
@@ -428,12 +512,12 @@ class DesignMap:
         return self._scalar(self._group(group, shape, x, allow_nan)[var])
 
     def base_shape(self, h_over_L, t_over_L, w_over_L, allow_nan: bool = False,
-                   state: str = "released") -> np.ndarray:
+                   state: str = "released", *, b_over_L=None) -> np.ndarray:
         """Base centreline in state (iii) (released by default, or ``state="actuated"``), per
         unit length: (M, 2) of (x, z) / L (or (..., M, 2) for array queries), starting at
         (0, 0) with the start tangent along +x."""
         state = self._state(state)
-        shape, x = self._points(h_over_L, t_over_L, w_over_L)
+        shape, x = self._points(h_over_L, t_over_L, w_over_L, b_over_L)
         group, rgi = self._shape_rgi[state]
         _, _, bad_rgi, _ = self._interp[group]
         wbad = bad_rgi(x)
@@ -446,7 +530,7 @@ class DesignMap:
         return out.reshape(*shape, self.samples, 2)
 
     def force_newtons(self, h_over_L, t_over_L, w_over_L, E: float = 2.2e9, L: float = 0.1,
-                      allow_nan: bool = False):
+                      allow_nan: bool = False, *, b_over_L=None):
         """Critical force F_cr in N for Young's modulus E (Pa) and base length L (m):
         F_cr = F_norm E I_arch / L^2 with I_arch = w t^3 / 12."""
         for name, v, what in (("E", E, "Young's modulus, Pa"), ("L", L, "base length, m")):
@@ -454,25 +538,26 @@ class DesignMap:
                     or not (isinstance(v, (int, float, np.floating, np.integer))
                             and np.isfinite(v) and v > 0)):
                 raise ValueError(f"{name} must be a finite number > 0 ({what}), got {v!r}")
-        f = self.value("F_cr", h_over_L, t_over_L, w_over_L, allow_nan=allow_nan)
+        f = self.value("F_cr", h_over_L, t_over_L, w_over_L, allow_nan=allow_nan, b_over_L=b_over_L)
         t = np.asarray(t_over_L, float) * L
         w = np.asarray(w_over_L, float) * L
         return self._scalar(np.asarray(f * E * (w * t**3 / 12.0) / L**2))
 
     # ---------------------------------------------------------------- along h
-    def _theta_column(self, t_over_L, w_over_L, state="released", angle="theta"):
-        """``angle`` (theta or theta_end, deg) at every grid h/L for one (t, w), NaN where
+    def _theta_column(self, t_over_L, w_over_L, state="released", angle="theta", b_over_L=None):
+        """``angle`` (theta or theta_end, deg) at every grid h/L for one (t, w, b), NaN where
         undefined."""
         t = float(self._one("t_over_L", t_over_L))
         w = float(self._one("w_over_L", w_over_L))
+        b = None if b_over_L is None else float(self._one("b_over_L", b_over_L))
         h = self._axes[0]
         th = self.value(angle, h, np.full_like(h, t), np.full_like(h, w), allow_nan=True,
-                        state=state)
+                        state=state, b_over_L=b)
         return h, np.asarray(th)
 
-    def _runs(self, t_over_L, w_over_L, state="released", angle="theta"):
+    def _runs(self, t_over_L, w_over_L, state="released", angle="theta", b_over_L=None):
         """Contiguous runs of grid h/L where the angle is defined: list of (i0, i1) inclusive."""
-        h, th = self._theta_column(t_over_L, w_over_L, state, angle)
+        h, th = self._theta_column(t_over_L, w_over_L, state, angle, b_over_L)
         ok = np.isfinite(th)
         runs, i = [], 0
         while i < ok.size:
@@ -495,8 +580,9 @@ class DesignMap:
                              f"of shape {v.shape}")
         return float(v.reshape(-1)[0])
 
-    def _where(self, t_over_L, w_over_L, state="released"):
-        return f"t/L={float(t_over_L):g}, w/L={float(w_over_L):g} ({state} state)"
+    def _where(self, t_over_L, w_over_L, state="released", b_over_L=None):
+        b = "" if b_over_L is None else f", b/L={float(b_over_L):g}"
+        return f"t/L={float(t_over_L):g}, w/L={float(w_over_L):g}{b} ({state} state)"
 
     @staticmethod
     def _check_angle(angle):
@@ -505,35 +591,39 @@ class DesignMap:
                              f"'theta_end' (end tangent to chord); got {angle!r}")
         return angle
 
-    def bistable_boundary(self, t_over_L, w_over_L, state: str = "released") -> float:
-        """Smallest grid h/L from which S, theta, ... of ``state`` are defined at (t/L, w/L);
-        the true boundary lies within one h/L grid step below it."""
+    def bistable_boundary(self, t_over_L, w_over_L, state: str = "released", *,
+                          b_over_L=None) -> float:
+        """Smallest grid h/L from which S, theta, ... of ``state`` are defined at (t/L, w/L,
+        b/L); the true boundary lies within one h/L grid step below it."""
         state = self._state(state)
-        h, th, runs = self._runs(t_over_L, w_over_L, state)
+        h, th, runs = self._runs(t_over_L, w_over_L, state, b_over_L=b_over_L)
         if not runs:
-            raise MapDomainError(f"no bistable unit in the map at {self._where(t_over_L, w_over_L, state)}")
+            raise MapDomainError(f"no bistable unit in the map at "
+                                 f"{self._where(t_over_L, w_over_L, state, b_over_L)}")
         return float(h[runs[0][0]])
 
     def theta_range(self, t_over_L, w_over_L, state: str = "released",
-                    angle: str = "theta") -> tuple[float, float]:
+                    angle: str = "theta", *, b_over_L=None) -> tuple[float, float]:
         """(min, max) of ``angle`` (theta, or theta_end) in degrees over the map's h/L range at
         (t/L, w/L). If failed grid points leave holes, some angles inside are not reachable
         (the inverse lookup says which)."""
         state = self._state(state)
-        h, th, runs = self._runs(t_over_L, w_over_L, state, self._check_angle(angle))
+        h, th, runs = self._runs(t_over_L, w_over_L, state, self._check_angle(angle), b_over_L)
         if not runs:
-            raise MapDomainError(f"no bistable unit in the map at {self._where(t_over_L, w_over_L, state)}")
+            raise MapDomainError(f"no bistable unit in the map at "
+                                 f"{self._where(t_over_L, w_over_L, state, b_over_L)}")
         return float(np.nanmin(th)), float(np.nanmax(th))
 
-    def h_over_L_for_theta_end(self, theta_end_deg, t_over_L, w_over_L, state: str = "released"):
+    def h_over_L_for_theta_end(self, theta_end_deg, t_over_L, w_over_L, state: str = "released",
+                               *, b_over_L=None):
         """h/L giving the end angle theta_end_deg (degrees, end tangent to chord; the paper's
-        maps' convention, most likely) at (t/L, w/L). See `h_over_L_for_theta`."""
+        maps' convention, most likely) at (t/L, w/L, b/L). See `h_over_L_for_theta`."""
         return self.h_over_L_for_theta(theta_end_deg, t_over_L, w_over_L, state=state,
-                                       angle="theta_end")
+                                       angle="theta_end", b_over_L=b_over_L)
 
     def h_over_L_for_theta(self, theta_deg, t_over_L, w_over_L, state: str = "released",
-                           angle: str = "theta"):
-        """h/L giving the signed angle theta_deg (degrees) at (t/L, w/L): a root of the
+                           angle: str = "theta", *, b_over_L=None):
+        """h/L giving the signed angle theta_deg (degrees) at (t/L, w/L, b/L): a root of the
         interpolated theta(h/L) of ``state`` (``angle="theta_end"``: of theta_end). If it is not
         monotone, the smallest such h/L. Broadcasts; raises MapDomainError when the angle is
         outside the reachable range (which it states)."""
@@ -542,14 +632,15 @@ class DesignMap:
         state = self._state(state)
         angle = self._check_angle(angle)
         name = f"{angle}_deg"
-        th_q, t_q, w_q = _broadcast(**{name: theta_deg, "t_over_L": t_over_L,
-                                       "w_over_L": w_over_L})
+        b_in = self._b_query(b_over_L)
+        th_q, t_q, w_q, b_q = _broadcast(**{name: theta_deg, "t_over_L": t_over_L,
+                                            "w_over_L": w_over_L, "b_over_L": b_in})
         out = np.empty(th_q.shape)
         for k in np.ndindex(th_q.shape):
-            target, t, w = float(th_q[k]), float(t_q[k]), float(w_q[k])
-            self._points(self._axes[0][0], t, w)  # range check of t and w
-            h, th, runs = self._runs(t, w, state, angle)
-            where = self._where(t, w, state)
+            target, t, w, bq = float(th_q[k]), float(t_q[k]), float(w_q[k]), float(b_q[k])
+            self._points(self._axes[0][0], t, w, bq)  # range check of t, w and b
+            h, th, runs = self._runs(t, w, state, angle, bq)
+            where = self._where(t, w, state, None if b_over_L is None else bq)
             if not runs:
                 raise MapDomainError(f"no bistable unit in the map at {where}")
             if not np.isfinite(target):
@@ -568,7 +659,8 @@ class DesignMap:
                     elif b == 0:
                         found = h[i + 1]
                     elif a * b < 0:
-                        fn = lambda x: float(self.value(angle, x, t, w, state=state)) - target  # noqa: E731
+                        fn = lambda x: float(self.value(angle, x, t, w, state=state,  # noqa: E731
+                                                        b_over_L=bq)) - target
                         found = brentq(fn, h[i], h[i + 1], xtol=1e-12, rtol=1e-12)
                     if found is not None:
                         break

@@ -40,11 +40,11 @@ class Accuracy:
         return "\n".join(lines)
 
 
-def _away_from_boundary(dm, h, t, w) -> bool:
+def _away_from_boundary(dm, h, t, w, b=None) -> bool:
     # theta defined on the cell and on the cells one h step below and above
     step = np.diff(dm.h_over_L).max()
     hs = np.clip([h - step, h, h + step], dm.h_over_L[0], dm.h_over_L[-1])
-    v = dm.value("theta", hs, t, w, allow_nan=True, state="actuated")
+    v = dm.value("theta", hs, t, w, allow_nan=True, state="actuated", b_over_L=b)
     return bool(np.all(np.isfinite(v)))
 
 
@@ -54,15 +54,17 @@ def check_nodes(dm, solve, resolution, b, k: int = 3, seed: int = 1, rtol: float
     rng = np.random.default_rng(seed)
     status = dm.dataset["status"].values
     ok = np.argwhere(status == 0)
-    for i, j, l in ok[rng.choice(len(ok), size=min(k, len(ok)), replace=False)]:
+    for idx in ok[rng.choice(len(ok), size=min(k, len(ok)), replace=False)]:
+        i, j, l = idx[:3]
         h, t, w = dm.h_over_L[i], dm.t_over_L[j], dm.w_over_L[l]
-        rec = solve(float(h), float(t), float(w), b, resolution, dm.samples)
+        b_point = float(dm.b_over_L[idx[3]]) if len(idx) > 3 else b
+        rec = solve(float(h), float(t), float(w), b_point, resolution, dm.samples)
         for name in ("theta", "S", "F_cr"):
-            stored = float(dm.dataset[name].values[i, j, l])
+            stored = float(dm.dataset[name].values[tuple(idx)])
             if not abs(rec[name] - stored) <= rtol * abs(stored):
                 raise ValueError(
                     f"the map does not reproduce the solver at the grid point h/L={h:g}, t/L={t:g}, "
-                    f"w/L={w:g}: {name} stored {stored!r}, simulated now {rec[name]!r}; the solver "
+                    f"w/L={w:g}, b/L={b_point:g}: {name} stored {stored!r}, simulated now {rec[name]!r}; the solver "
                     f"changed since the map was built (rebuild it first)")
 
 
@@ -73,24 +75,27 @@ def measure(dm, n: int = 50, seed: int = 0, solve=None, max_tries: int = 100000)
 
     solve = solve or solve_point
     rng = np.random.default_rng(seed)
-    (h0, h1), (t0, t1), (w0, w1) = dm.ranges.values()
+    ranges = dm.ranges
+    (h0, h1), (t0, t1), (w0, w1) = (ranges[d] for d in ("h_over_L", "t_over_L", "w_over_L"))
+    # a map with a b/L axis: b/L drawn over its range too; else the map's one b/L
+    b0, b1 = ranges.get("b_over_L", (float(dm.attrs.get("b_over_L", 0.0)),) * 2)
     resolution = int(dm.attrs.get("resolution", -1))
     resolution = None if resolution < 0 else resolution
-    b = float(dm.attrs.get("b_over_L", 0.0))
-    check_nodes(dm, solve, resolution, b)
+    check_nodes(dm, solve, resolution, b0)
     pts, th, S, F = [], [], [], []
     skipped = 0
     for _ in range(max_tries):
         if len(pts) >= n:
             break
         h, t, w = rng.uniform(h0, h1), rng.uniform(t0, t1), rng.uniform(w0, w1)
-        if not _away_from_boundary(dm, h, t, w):
+        b = rng.uniform(b0, b1) if b1 > b0 else b0
+        if not _away_from_boundary(dm, h, t, w, b):
             continue
         rec = solve(h, t, w, b, resolution, dm.samples)
         if rec["status"] != 0:
             skipped += 1
             continue
-        v = dm.at(h, t, w, state="actuated")
+        v = dm.at(h, t, w, state="actuated", b_over_L=b)
         pts.append((h, t, w))
         th.append(v["theta"] - rec["theta"])
         S.append((v["S"] - rec["S"]) / rec["S"])

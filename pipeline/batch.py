@@ -24,7 +24,7 @@ def new_block(spec, indices, options: dict, coords=None) -> dict:
     n = idx.size
     block = {"index": idx}
     block["coords"] = (np.full((n, len(spec.dims)), np.nan) if coords is None
-                       else np.asarray(coords, dtype=float).reshape(n, len(spec.dims)).copy())
+                       else np.asarray(coords, dtype=float).reshape(n, -1).copy())
     for name in spec.float_vars:
         block[name] = np.full(n, np.nan)
     for name in spec.flag_vars:
@@ -32,6 +32,8 @@ def new_block(spec, indices, options: dict, coords=None) -> dict:
     block["status"] = np.full(n, PENDING, dtype=np.int8)
     for name in spec.array_vars:
         block[name] = np.full((n, *spec.array_shape(name, options)), np.nan)
+    for name in spec.text_vars:
+        block[name] = np.array([""] * n, dtype=object)
     block["solve_time"] = np.full(n, np.nan)
     block["message"] = np.array([""] * n, dtype=object)
     return block
@@ -81,7 +83,7 @@ def check_block(block: dict, spec, options: dict, points: np.ndarray) -> None:
         raise ValueError("repeated indices")
     for key in keys[1:]:
         if key == "coords":
-            expected = (n, len(spec.dims))
+            expected = (n, points.shape[1])
         elif key in spec.array_vars:
             expected = (n, *spec.array_shape(key, options))
         else:
@@ -136,7 +138,7 @@ def solve_points(indices, coords, spec, options: dict, solve, time_limit=None) -
     not return). `solve_time` is the wall time (s) of each point's solve.
     """
     fn = resolve_solver(solve)
-    coords = np.asarray(coords, dtype=float).reshape(len(indices), len(spec.dims))
+    coords = np.asarray(coords, dtype=float).reshape(len(indices), -1)
     block = new_block(spec, indices, options, coords)
     failed = spec.code("not_converged")
     for k, point in enumerate(coords):

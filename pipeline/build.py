@@ -32,7 +32,7 @@ from snapmorph.pipeline.batch import (check_block, merge, new_block, put, resolv
                                       solver_name, timeout_record)
 from snapmorph.pipeline.checkpoint import Checkpoint, checkpoint_dir
 from snapmorph.pipeline.fingerprint import (build_inputs, canonical, differences, fingerprint,
-                                            solver_modules, source_hash, source_provenance)
+                                            solver_modules, source_hash)
 from snapmorph.pipeline.solvers import PENDING, get_spec
 
 _DEFAULT = object()
@@ -314,8 +314,7 @@ def open_checkpoint(out, grid, solve=None, restart: bool = False, *, kind="unit"
     solver (default the kind's); identity: the build's (spec, options, inputs, fingerprint) if
     already computed."""
     spec, options, inputs, fp = identity or build_identity(grid, solve, kind)
-    prov = {**source_provenance(solver_modules(spec, resolve_solver(solve if solve is not None else spec.solve))),
-            "package_version": dataset.package_version(), "resolution": options.get("resolution")}
+    prov = {**dataset.provenance(), "resolution": options.get("resolution")}
     return Checkpoint.open(out, grid, inputs["solver"], prov, restart=restart, spec=spec,
                            inputs=inputs, fingerprint=fp)
 
@@ -438,7 +437,7 @@ def _report(out, spec, grid, status, total, t_start, up_to_date=False, fingerpri
                        startup_time=0.0, solve_time_sum=0.0,
                        status_counts=dict(Counter(int(s) for s in status)), failures=failures,
                        up_to_date=up_to_date, fingerprint=fingerprint, failed=int(failed_mask.sum()),
-                       status_names=names or {}, dims=tuple(spec.dims), time_limit=time_limit)
+                       status_names=names or {}, dims=spec.grid_dims(grid), time_limit=time_limit)
 
 
 def _write_and_verify(spec, grid, options, inputs, fp, meta, total, coords, out, keep_solve_time):

@@ -78,7 +78,7 @@ class CheckpointError(ValueError):
 def _same_rows(a: dict, ia, b: dict, ib, keys) -> bool:
     """Whether rows ia of block a equal rows ib of block b in every key (NaN equal to NaN)."""
     for key in keys:
-        x, y = np.asarray(a[key])[ia], np.asarray(b[key])[ib]
+        x, y = np.asarray(np.asarray(a[key])[ia]), np.asarray(np.asarray(b[key])[ib])
         if x.dtype.kind == "f" or y.dtype.kind == "f":
             if not np.array_equal(x, y, equal_nan=True):
                 return False
@@ -182,7 +182,8 @@ class Checkpoint:
             except Exception as exc:
                 self._refuse(p, f"unreadable ({exc})")
                 continue
-            block["message"] = block["message"].astype(object)
+            for k in spec.text_keys:
+                block[k] = block[k].astype(object)
             if fp != self.fingerprint:
                 self._refuse(p, f"it belongs to another build (fingerprint {fp[:12]}, this build "
                                 f"{self.fingerprint[:12]})")
@@ -220,7 +221,8 @@ class Checkpoint:
         first = int(block["index"][0])
         path = self.dir / f"batch-{first:07d}-{uuid.uuid4().hex[:8]}.npz"
         arrays = {k: block[k] for k in keys}
-        arrays["message"] = np.asarray([str(m) for m in block["message"]], dtype=str)
+        for k in self.spec.text_keys:
+            arrays[k] = np.asarray([str(m) for m in block[k]], dtype=str)
         arrays["fingerprint"] = np.asarray(self.fingerprint)
         arrays["checksum"] = np.asarray(block_checksum(arrays, keys))
         atomic_write(path, lambda f: np.savez(f, **arrays))

@@ -84,6 +84,10 @@ def compare_maps(expected, actual, rtol: float = 1e-6, atol: float = 1e-9) -> li
         if np.issubdtype(e.dtype, np.integer) and np.issubdtype(a.dtype, np.integer):
             bad = e != a
             err = np.where(bad, np.abs(e.astype(float) - a), 0.0)
+        elif e.dtype.kind in "OUS" or a.dtype.kind in "OUS":  # text: equal or not
+            e, a = e.astype(str), a.astype(str)
+            bad = e != a
+            err = bad.astype(float)
         else:
             e, a = e.astype(float), a.astype(float)
             both_nan = np.isnan(e) & np.isnan(a)

@@ -3,15 +3,15 @@ write it as compressed netCDF4, atomically.
 
 The assembler does no physics: it reshapes, labels (CF `units`, `long_name`, status
 `flag_values` / `flag_meanings` from the kind's status codes) and adds the global attributes.
-The file's bytes are decided here and by the kind's spec, never by the clock: see
-`pipeline.build` for what a build records.
+The file's bytes are decided here and by the kind's spec, never by the clock or the checkout:
+see `pipeline.build` for what a build records. netCDF-C does not store HDF5 object times, so
+the same Dataset written twice gives the same bytes; the file's hidden `_NCProperties`
+attribute names the netCDF-C and HDF5 versions, so the bytes are those of one library build.
 """
 
 from __future__ import annotations
 
-import datetime as _dt
 import os
-import subprocess
 from importlib import metadata
 from pathlib import Path
 
@@ -25,22 +25,6 @@ from snapmorph.pipeline.fingerprint import canonical
 UNKNOWN_VERSION = "unknown"
 
 
-def utc_now() -> str:
-    """Current time, ISO 8601 UTC to the second."""
-    return _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
-
-
-def git_commit() -> str:
-    """`git rev-parse HEAD` of the source tree, or "unknown"."""
-    here = Path(__file__).resolve().parent
-    try:
-        r = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True,
-                           text=True, timeout=10)
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-    return r.stdout.strip() if r.returncode == 0 and r.stdout.strip() else "unknown"
-
-
 def package_version() -> str:
     """The installed snapmorph's version (its distribution metadata)."""
     try:
@@ -50,8 +34,12 @@ def package_version() -> str:
 
 
 def provenance() -> dict:
-    """What a new build records: start time, package version, git commit."""
-    return {"created": utc_now(), "package_version": package_version(), "git_commit": git_commit()}
+    """What a new build records of itself: the package version, and "created" and
+    "git_commit" as `fingerprint.RECORDED_PROVENANCE` (not the clock or the checkout: a map's
+    bytes depend only on its inputs)."""
+    from snapmorph.pipeline.fingerprint import RECORDED_PROVENANCE
+
+    return {**RECORDED_PROVENANCE, "package_version": package_version()}
 
 
 def generic_attrs(spec, grid, options: dict, provenance: dict) -> dict:
@@ -78,13 +66,17 @@ def assemble(spec, grid, total: dict, options: dict, provenance: dict) -> xr.Dat
         return (dim, values, {"units": units, "long_name": long_name})
 
     coords = {d: coord(d, np.asarray(v)) for d, v in grid.axes.items()}
+    dims = spec.grid_dims(grid)
     data = {}
     for name, (units, long_name) in spec.float_vars.items():
-        data[name] = (spec.dims, total[name][order].reshape(shape), {"units": units, "long_name": long_name})
+        data[name] = (dims, total[name][order].reshape(shape), {"units": units, "long_name": long_name})
     for name, (units, long_name) in spec.flag_vars.items():
-        data[name] = (spec.dims, total[name][order].astype(np.int8).reshape(shape),
+        data[name] = (dims, total[name][order].astype(np.int8).reshape(shape),
                       {"units": units, "long_name": long_name})
-    data["status"] = (spec.dims, total["status"][order].astype(np.int8).reshape(shape),
+    for name, (units, long_name) in spec.text_vars.items():
+        data[name] = (dims, np.array([str(v) for v in total[name][order]], dtype=object).reshape(shape),
+                      {"units": units, "long_name": long_name})
+    data["status"] = (dims, total["status"][order].astype(np.int8).reshape(shape),
                       status_attrs(spec.all_codes))
     for name, (extra, _, units, long_name) in spec.array_vars.items():
         sizes = spec.array_shape(name, options)
@@ -92,9 +84,9 @@ def assemble(spec, grid, total: dict, options: dict, provenance: dict) -> xr.Dat
             if d not in coords:
                 labels = spec.dim_labels.get(d)
                 coords[d] = coord(d, np.arange(n, dtype=np.int32) if labels is None else np.array(labels))
-        data[name] = ((*spec.dims, *extra), total[name][order].reshape(*shape, *sizes),
+        data[name] = ((*dims, *extra), total[name][order].reshape(*shape, *sizes),
                       {"units": units, "long_name": long_name})
-    data["solve_time"] = (spec.dims, total["solve_time"][order].reshape(shape), dict(SOLVE_TIME_ATTRS))
+    data["solve_time"] = (dims, total["solve_time"][order].reshape(shape), dict(SOLVE_TIME_ATTRS))
     hook = spec.hook("global_attrs")
     attrs = hook(grid, options, provenance) if hook else generic_attrs(spec, grid, options, provenance)
     return xr.Dataset(data, coords=coords, attrs=attrs)
@@ -106,6 +98,8 @@ def encoding(ds: xr.Dataset) -> dict:
     for name, var in ds.variables.items():
         if name in ds.coords:
             enc[name] = {"_FillValue": None}
+        elif var.dtype.kind in "OUS":  # variable-length strings: HDF5 does not compress them
+            enc[name] = {"dtype": str}
         elif np.issubdtype(var.dtype, np.integer):
             enc[name] = {"zlib": True, "complevel": 4, "shuffle": True, "_FillValue": None}
         else:

@@ -16,11 +16,9 @@ The per-point time limit is not an input: it decides only whether a slow point e
 from __future__ import annotations
 
 import ast
-import datetime as _dt
 import hashlib
 import importlib.util
 import json
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -170,7 +168,16 @@ def build_inputs(spec, grid, options: dict, solver: str, source_sha256: str) -> 
         "model_options": json.loads(canonical(options)),
         "solver": solver,
         "solver_source_sha256": source_sha256,
+        # the version the file states is an input too, so that it cannot change the bytes of
+        # a map that is up to date
+        "package_version": _package_version(),
     }
+
+
+def _package_version() -> str:
+    from snapmorph.pipeline.dataset import package_version
+
+    return package_version()
 
 
 def fingerprint(inputs: dict) -> str:
@@ -189,7 +196,7 @@ def block_checksum(block: dict, keys) -> str:
     h = hashlib.sha256()
     for key in keys:
         v = block[key]
-        if key == "message":
+        if key == "message" or np.asarray(v).dtype.kind in "OU":
             data = "\0".join(str(m) for m in v).encode()
             h.update(f"{key}|str|{len(v)}|".encode() + data)
             continue
@@ -199,32 +206,9 @@ def block_checksum(block: dict, keys) -> str:
     return h.hexdigest()
 
 
-def source_provenance(modules) -> dict:
-    """{"git_commit", "created"} of the model source: the last commit that touched the files of
-    `modules` ("+modified" appended when they differ from it) and that commit's date (ISO 8601
-    UTC). Not the wall-clock time of the build, so that a rebuild is bit-identical. "unknown"
-    without git."""
-    files = [p for _, p in source_files(modules)]
-    rel = []
-    for p in files:
-        try:
-            rel.append(str(p.relative_to(REPO)))
-        except ValueError:
-            pass
-    unknown = {"git_commit": "unknown", "created": "unknown"}
-    if not rel:
-        return unknown
-    try:
-        r = subprocess.run(["git", "log", "-1", "--format=%H %ct", "--", *rel], cwd=REPO,
-                           capture_output=True, text=True, timeout=20)
-        if r.returncode != 0 or not r.stdout.strip():
-            return unknown
-        commit, stamp = r.stdout.split()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", *rel],
-                               cwd=REPO, capture_output=True, text=True, timeout=20)
-    except (OSError, subprocess.SubprocessError, ValueError):
-        return unknown
-    created = _dt.datetime.fromtimestamp(int(stamp), _dt.timezone.utc).isoformat()
-    if dirty.returncode == 0 and dirty.stdout.strip():
-        commit += "+modified"
-    return {"git_commit": commit, "created": created}
+#: what a map says of its own build: "created" and "git_commit" are not recorded (the date,
+#: the checkout and whether it was modified change between builds of the same inputs and
+#: would make a rebuild differ from the committed file); `build_inputs`, `inputs_sha256` and
+#: `solver_source_sha256` say what determined the map
+RECORDED_PROVENANCE = {"created": "unknown",
+                       "git_commit": "not recorded (a map records its inputs: see solver_source_sha256)"}

@@ -140,6 +140,10 @@ class SolverSpec:
     float_vars / flag_vars: name -> (units, long_name);
     array_vars: name -> (extra dims, extra shape, units, long_name), a shape entry that is a
       string is read from the model options (e.g. "samples");
+    text_vars: name -> (units, long_name) of per-point strings ("" where absent);
+    fixed_dims: grid dimension -> default value, for the dimensions a grid may fix instead of
+      spanning (a model option of the same name): the map then has the other dimensions, and
+      the solver gets the fixed value where the coordinate would be;
     dim_attrs: dimension -> (units, long_name) of its coordinate (grid or extra dimension);
     dim_labels: extra dimension -> its fixed coordinate values (default 0, 1, ...);
     status_codes: code -> name, must include 0 "ok" (-1 "pending" is implied);
@@ -172,6 +176,8 @@ class SolverSpec:
     float_vars: dict
     flag_vars: dict = field(default_factory=dict)
     array_vars: dict = field(default_factory=dict)
+    text_vars: dict = field(default_factory=dict)
+    fixed_dims: dict = field(default_factory=dict)
     status_codes: dict = field(default_factory=lambda: {0: "ok", 2: "not_converged", 4: "timeout"})
     failure_statuses: tuple = ("not_converged", "timeout")
     required_when_ok: tuple | None = None
@@ -251,7 +257,12 @@ class SolverSpec:
     def block_keys(self) -> tuple:
         """The keys of a result block (see pipeline.batch)."""
         return ("index", "coords", *self.float_vars, *self.int_vars, *self.array_vars,
-                "solve_time", "message")
+                *self.text_vars, "solve_time", "message")
+
+    @property
+    def text_keys(self) -> tuple:
+        """The block keys that hold strings."""
+        return (*self.text_vars, "message")
 
     # -- grids and options --------------------------------------------------------------------
     def preset(self, name: str):
@@ -262,15 +273,26 @@ class SolverSpec:
         return p() if callable(p) else p
 
     def grid_options(self, grid) -> dict:
-        """The model options of `grid` (defaults filled in), resolved (e.g. the default resolution)."""
-        opts = {**self.options, **dict(getattr(grid, "options", {}))}
+        """The model options of `grid` (defaults filled in), resolved (e.g. the default
+        resolution); the dimensions the grid fixes first, in dimension order (a positional
+        solver gets them where their coordinates would be)."""
+        given = dict(getattr(grid, "options", {}))
+        axes = tuple(getattr(grid, "dims", ()))
+        fixed = {d: given.pop(d, v) for d, v in self.fixed_dims.items() if d not in axes}
+        opts = {**fixed, **self.options, **given}
         fill = self.hook("resolve_options")
         return fill(opts) if fill else opts
 
+    def grid_dims(self, grid) -> tuple:
+        """The dimensions of a map of `grid`: this kind's, less those the grid fixes."""
+        axes = tuple(getattr(grid, "dims", ()))
+        return tuple(d for d in self.dims if d in axes or d not in self.fixed_dims)
+
     def check_grid(self, grid) -> None:
-        """ValueError unless `grid` has this kind's dimensions and lies in its domain."""
+        """ValueError unless `grid` has this kind's dimensions (less those it may fix) and lies
+        in its domain."""
         dims = tuple(getattr(grid, "dims", ()))
-        if dims != self.dims:
+        if dims != self.grid_dims(grid):
             raise ValueError(f"grid dimensions {dims} do not match kind {self.name!r} {self.dims}")
         domain = self.hook("domain")
         if domain:
@@ -286,6 +308,7 @@ class SolverSpec:
         rec.update({name: self.flag_defaults.get(name, -1) for name in self.flag_vars})
         for name in self.array_vars:
             rec[name] = np.full(self.array_shape(name, options), np.nan)
+        rec.update({name: "" for name in self.text_vars})
         rec["status"] = int(status)
         rec["message"] = str(message)
         return rec
@@ -323,6 +346,8 @@ class SolverSpec:
                     if arr.shape != want:
                         raise ValueError(f"{name} has shape {arr.shape}, expected {want}")
                     out[name] = arr.copy()
+            for name in self.text_vars:
+                out[name] = _text(self._get(rec, name, ""))
         except Exception as exc:
             return self.empty_record(options, bad, f"malformed solver record: {exc!r}")
         rules = self.hook("rules")
@@ -343,6 +368,15 @@ class SolverSpec:
         if self.call == "positional":
             return fn(*(float(c) for c in coords), *options.values(), **kwargs)
         return fn(*(float(c) for c in coords), **options, **kwargs)
+
+
+def _text(value) -> str:
+    """A record's text value: "" for None or NaN (absent), else the string."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return ""
+    if not isinstance(value, str):
+        raise ValueError(f"text value {value!r} is not a string")
+    return value
 
 
 def accepts_time_limit(fn) -> bool:

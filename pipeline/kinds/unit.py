@@ -4,9 +4,10 @@ section (the map of docs/design-map-schema.md, names from `maps.schema`).
     from snapmorph.pipeline.kinds.unit import SPEC, preset, solve_point
     rec = solve_point(0.2, 0.005, 0.05)       # one point: a dimensionless schema record
 
-`Grid` is a `MapGrid` over (h/L, t/L, w/L) with the model options b/L, resolution and samples,
-checked against the unit's domain; points are numbered in C order over (h, t, w): index =
-(i_h * n_t + i_t) * n_w + i_w. `solve_point` simulates one unit with `snapmorph.units.planar`
+`Grid` is a `MapGrid` over (h/L, t/L, w/L, b/L), or over (h/L, t/L, w/L) at one fixed b/L
+(the three-axis layout of the maps before schema 3), with the model options resolution and samples,
+checked against the unit's domain; points are numbered in C order over the axes: index =
+((i_h * n_t + i_t) * n_w + i_w) * n_b + i_b (without the last factor at a fixed b/L). `solve_point` simulates one unit with `snapmorph.units.planar`
 and returns its record; it never raises, so that one odd point cannot break a build.
 """
 
@@ -18,8 +19,10 @@ import math
 import numpy as np
 
 from snapmorph.maps.schema import (
-    BISTABLE_ONLY, COORD_ATTRS, DEFAULT_SAMPLES, FLAG_VARS, FLOAT_VARS, GRID_DIMS, NORMALISATION,
-    OPTIONAL_VARS, RELEASED_VARS, SCHEMA_VERSION, SHAPE_ATTRS, SHAPE_DIMS, SHAPE_VARS, XZ,
+    B_DIM, BISTABLE_ONLY, COORD_ATTRS, DEFAULT_SAMPLES, FLAG_VARS, FLOAT_VARS,
+    GRID_DIMS, GRID_DIMS_B, METRIC_SOURCES, NORMALISATION_3, OPTIONAL_VARS, PATH_METRICS,
+    RELEASED_METRICS, RELEASED_VARS, SCHEMA_VERSION, SHAPE_ATTRS, SHAPE_DIMS, SHAPE_VARS, TEXT_VARS,
+    XZ,
 )
 from snapmorph.pipeline.solvers import MapGrid, SolverSpec, failure_statuses, status_codes
 from snapmorph.units import status as unit_status
@@ -43,6 +46,7 @@ _RANGES = {
     "h_over_L": (0.0, 1.0, False, True),
     "t_over_L": (0.0, 0.05, False, True),
     "w_over_L": (0.0, 0.5, False, False),
+    "b_over_L": (0.0, 0.5, True, False),
 }
 
 #: solver resolution (`nodes` of `snapmorph.units.planar.simulate_unit`) of a Grid unless
@@ -80,25 +84,32 @@ def _axis(name: str, values) -> tuple[float, ...]:
     return tuple(float(v) for v in arr)
 
 
-def _options(b_over_L, resolution, samples) -> dict:
-    """The grid's model options, validated."""
-    b = b_over_L
-    if not isinstance(b, (int, float, np.floating, np.integer)) or not np.isfinite(b) or b < 0:
+def _fixed_b(b) -> float:
+    """One b/L for a whole map, validated."""
+    if isinstance(b, bool) or not isinstance(b, (int, float, np.floating, np.integer)) \
+            or not np.isfinite(b) or b < 0:
         raise ValueError(f"b_over_L must be a finite number >= 0, got {b!r}")
+    return float(b)
+
+
+def _options(resolution, samples) -> dict:
+    """The grid's model options, validated."""
     r = resolution
     if r is not None and (isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r < MIN_RESOLUTION):
         raise ValueError(f"resolution must be None or an integer >= {MIN_RESOLUTION}, got {r!r}")
     s = samples
     if isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 2:
         raise ValueError(f"samples must be an integer >= 2, got {s!r}")
-    return {"b_over_L": float(b), "resolution": None if r is None else int(r), "samples": int(s)}
+    return {"resolution": None if r is None else int(r), "samples": int(s)}
 
 
 class Grid(MapGrid):
     """A design-map grid of the planar unit.
 
     h_over_L, t_over_L, w_over_L: axis values (dimensionless, strictly increasing, >= 2 each);
-    b_over_L: extra flat length of the arch ends / L (0 in the paper's study);
+    b_over_L: extra flat length of the arch ends / L: a sequence (>= 2 values) is the fourth
+      axis; one number fixes it for the whole map (the three-axis layout; default 0, the b/L
+      of the maps before schema 3);
     resolution: solver `nodes` parameter (None = the solver's converged default);
     samples: number M of base-shape samples; name: preset name or "custom".
     """
@@ -107,20 +118,33 @@ class Grid(MapGrid):
                  resolution: int | None = PRESET_RESOLUTION, samples: int = DEFAULT_SAMPLES,
                  name: str = "custom"):
         axes = {d: _axis(d, v) for d, v in zip(GRID_DIMS, (h_over_L, t_over_L, w_over_L))}
-        options = _options(b_over_L, resolution, samples)
-        w_max = axes["w_over_L"][-1]
-        if options["b_over_L"] + w_max >= 0.5:
+        options = _options(resolution, samples)
+        if np.ndim(b_over_L) == 0 and not isinstance(b_over_L, (list, tuple)):
+            b_max = _fixed_b(b_over_L)
+            options = {B_DIM: b_max, **options}
+        else:
+            axes[B_DIM] = _axis(B_DIM, b_over_L)
+            b_max = axes[B_DIM][-1]
+        w_max, h_max = axes["w_over_L"][-1], axes["h_over_L"][-1]
+        if b_max + w_max >= 0.5:
             raise ValueError(
                 f"b_over_L + w_over_L must be < 0.5 (the sinusoidal part needs L - 2(b + w) > 0); "
-                f"got b_over_L = {options['b_over_L']} with largest w_over_L = {w_max}, "
+                f"got b_over_L = {b_max} with largest w_over_L = {w_max}, "
                 f"so b_over_L must be < {0.5 - w_max:g}"
             )
+        if h_max > 1.0 - 2.0 * (b_max + w_max) + 1e-12:
+            raise ValueError(
+                f"h_over_L must be <= the sinusoid's span 1 - 2 (b_over_L + w_over_L) at every grid "
+                f"point (a steeper sinusoid folds over itself); got h_over_L = {h_max} with "
+                f"b_over_L = {b_max} and w_over_L = {w_max}, so b_over_L must be <= "
+                f"{0.5 * (1.0 - h_max) - w_max:g}")
         super().__init__(axes, options, name)
 
     h_over_L = property(lambda self: self.axes["h_over_L"], doc="Grid values of h/L.")
     t_over_L = property(lambda self: self.axes["t_over_L"], doc="Grid values of t/L.")
     w_over_L = property(lambda self: self.axes["w_over_L"], doc="Grid values of w/L.")
-    b_over_L = property(lambda self: self.options["b_over_L"], doc="Extra flat length / L.")
+    b_over_L = property(lambda self: self.axes[B_DIM] if B_DIM in self.axes else self.options[B_DIM],
+                        doc="Extra flat length / L: the axis values, or the one value of the map.")
     resolution = property(lambda self: self.options["resolution"], doc="Solver nodes (None: default).")
     samples = property(lambda self: self.options["samples"], doc="Base-shape samples M.")
 
@@ -137,24 +161,34 @@ def _lin(lo: float, hi: float, n: int) -> tuple[float, ...]:
     return tuple(float(round(v, 12)) for v in np.linspace(lo, hi, n))
 
 
+#: the b/L axis of the default map: the paper's b = w (b/L = 0.05 at L = 100 mm, w = 5 mm),
+#: the maps before schema 3 (0), and up to 0.15, the largest b/L at which every (h, w) of the
+#: grid is a valid unit (h/L <= 1 - 2 (b + w) / L with h/L = 0.5, w/L = 0.1)
+DEFAULT_B_OVER_L = (0.0, 0.05, 0.10, 0.15)
+
+
 def _preset_default() -> Grid:
-    # 46 x 9 x 9 = 3726 points; steps 0.01, 0.00125, 0.01 put the paper's t/L = 0.005, 0.0075
-    # and w/L = 0.05 exactly on the grid.
+    # 46 x 9 x 9 x 4 = 14904 points; steps 0.01, 0.00125, 0.01 put the paper's t/L = 0.005,
+    # 0.0075 and w/L = 0.05 exactly on the grid, and its h, t, w axes are those of the
+    # three-axis map (schema 2, b/L = 0) it replaces, so that every old point is a new one.
     return Grid(
         h_over_L=_lin(0.05, 0.50, 46),
         t_over_L=_lin(0.0025, 0.0125, 9),
         w_over_L=_lin(0.02, 0.10, 9),
+        b_over_L=DEFAULT_B_OVER_L,
         resolution=DEFAULT_MAP_RESOLUTION,
         name="default",
     )
 
 
 def _preset_ci() -> Grid:
-    # 4 x 3 x 2 = 24 points; h/L = 0.10 is monostable in the paper's model (Table 1, h = 10 mm).
+    # 4 x 3 x 2 x 2 = 48 points; h/L = 0.10 is monostable in the paper's model (Table 1,
+    # h = 10 mm); b/L = 0.05 is the paper's b = w.
     return Grid(
         h_over_L=(0.10, 0.20, 0.30, 0.40),
         t_over_L=(0.005, 0.0075, 0.01),
         w_over_L=(0.04, 0.06),
+        b_over_L=(0.0, 0.05),
         name="ci",
     )
 
@@ -175,7 +209,7 @@ def _check_domain(grid) -> None:
     domain."""
     if isinstance(grid, Grid):
         return
-    unknown = sorted(set(grid.options) - set(SPEC.options))
+    unknown = sorted(set(grid.options) - set(SPEC.options) - set(SPEC.fixed_dims))
     if unknown:
         raise ValueError(f"the planar unit has no model options {unknown} (it takes {list(SPEC.options)})")
     Grid(**grid.axes, **grid.options, name=grid.name)
@@ -220,7 +254,7 @@ def _record_rules(out: dict, rec: dict) -> list:
     state exists exactly where self_standing = 1, and all of it when the solver gave any of
     it; an ok point is bistable. Returns the values missing at an ok point."""
     if out["status"] in NOT_BISTABLE:
-        for name in (*BISTABLE_ONLY, *RELEASED_VARS):
+        for name in (*BISTABLE_ONLY, *RELEASED_VARS, *RELEASED_METRICS):
             out[name] = math.nan
         for name in SHAPE_VARS:
             out[name][:] = np.nan
@@ -229,7 +263,7 @@ def _record_rules(out: dict, rec: dict) -> list:
         return []
     missing = []
     if out["self_standing"] != 1:
-        for name in RELEASED_VARS:
+        for name in (*RELEASED_VARS, *RELEASED_METRICS):
             out[name] = math.nan
         out["base_shape_released"][:] = np.nan
     elif any(n in rec for n in RELEASED_VARS):
@@ -286,6 +320,8 @@ def normalise_result(r, samples: int = DEFAULT_SAMPLES) -> dict:
     rec["F_cr"] = float(r.F_cr) * f_scale
     rec["d_cr"] = float(r.d_cr) / L
     rec["bifurcation"] = _flag(r.bifurcation)
+    metrics = unit_metrics(r, f_scale, L)
+    rec.update({k: metrics[k] for k in (*PATH_METRICS, *TEXT_VARS)})
     if status in NOT_BISTABLE:
         return rec
     rec["bistable"] = 1 if r.bistable else 0
@@ -304,7 +340,28 @@ def normalise_result(r, samples: int = DEFAULT_SAMPLES) -> dict:
         rec["theta_released"] = float(rel["theta_deg"])
         rec["theta_end_released"] = float(rel.get("theta_end_deg", math.nan))
         rec["base_shape_released"] = resample_shape(np.asarray(rel["base_shape"], float) / L, samples)
+    if rec["self_standing"] == 1:
+        rec.update({k: metrics[k] for k in RELEASED_METRICS})
     return rec
+
+
+def unit_metrics(r, f_scale: float, L: float) -> dict:
+    """The schema-3 unit metrics of a unit result, normalised (`maps.schema.METRIC_SOURCES`):
+    forces x f_scale = L^2 / (E I_arch), lengths / L, the stiffness x f_scale L, strains as
+    they are. The one place that reads them: a result without a field gives NaN ("" for text),
+    so maps build before the unit model reports them."""
+    scale = {"force": f_scale, "length": 1.0 / L, "stiffness": f_scale * L, "1": 1.0}
+    out = {}
+    for name, (field, kind) in METRIC_SOURCES.items():
+        value = getattr(r, field, math.nan)
+        if kind == "text":
+            out[name] = value if isinstance(value, str) else ""
+            continue
+        try:
+            out[name] = float(value) * scale[kind]
+        except (TypeError, ValueError):
+            out[name] = math.nan
+    return out
 
 
 def unit_model():
@@ -404,18 +461,19 @@ def _check_file(path) -> None:
 def _global_attrs(grid, options: dict, provenance: dict) -> dict:
     """The schema's global attributes of a map of `grid` built with the resolved `options`."""
     resolution = options.get("resolution")
+    fixed_b = {} if B_DIM in grid.axes else {"b_over_L": float(options[B_DIM])}
     return {
         "title": f"{TITLE} (grid {grid.name})",
         "schema_version": np.int32(SCHEMA_VERSION),
         "grid": grid.name,
-        "b_over_L": float(options["b_over_L"]),
+        **fixed_b,
         # the resolution used (the solver default resolved at the start); netCDF has no None:
         # -1 means "the solver's default, which it did not state"
         "resolution": np.int32(-1 if resolution is None else resolution),
         "package_version": provenance["package_version"],
         "git_commit": provenance["git_commit"],
         "created": provenance["created"],
-        "normalisation": NORMALISATION,
+        "normalisation": NORMALISATION_3,
         "E_reference": float(E_REF),
         "L_reference": float(L_REF),
         **model_options(),
@@ -425,8 +483,10 @@ def _global_attrs(grid, options: dict, provenance: dict) -> dict:
 SPEC = SolverSpec(
     name="unit",
     solve=solve_point,
-    dims=GRID_DIMS,
+    dims=GRID_DIMS_B,
+    fixed_dims={B_DIM: 0.0},
     float_vars=dict(FLOAT_VARS),
+    text_vars=dict(TEXT_VARS),
     flag_vars=dict(FLAG_VARS),
     array_vars={name: (SHAPE_DIMS, ("samples", len(XZ)), *SHAPE_ATTRS[name].values())
                 for name in SHAPE_VARS},
@@ -437,7 +497,7 @@ SPEC = SolverSpec(
     required_when_ok=(*(n for n in FLOAT_VARS if n not in OPTIONAL_VARS), "base_shape"),
     required_keys=(*(n for n in FLOAT_VARS if n not in OPTIONAL_VARS), *FLAG_VARS, "base_shape"),
     flag_defaults={"bistable": 0},
-    options={"b_over_L": 0.0, "resolution": None, "samples": DEFAULT_SAMPLES},
+    options={"resolution": None, "samples": DEFAULT_SAMPLES},
     presets=dict(PRESETS),
     # the unit model, its normalisation and schema (the modules this one imports are hashed
     # with it: units.planar, the solver, maps.schema, ...)

@@ -37,6 +37,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     add_target_options(p, several=True)
     p.add_argument("--t", type=float, required=True, help="sheet thickness (mm)")
     p.add_argument("--w", type=float, required=True, help="strip width (mm)")
+    p.add_argument("--b", type=length_mm(0.0, low_inclusive=True,
+                                         what="extra flat length of the arch ends"),
+                   default=None, help="extra flat length of every arch's ends, mm (the paper's "
+                   "specimens: b = w; needs a map with a b/L axis); default: the map's own b/L")
     p.add_argument("--out", default="build/design", help="output directory (default %(default)s)")
     p.add_argument("--map", default=None, help="design map netCDF (default: the committed map)")
     p.add_argument("--tol", type=float, default=None,
@@ -142,6 +146,9 @@ def run(args) -> int:
             raise CommandError(f"--controls must be comma-separated numbers (mm), "
                                f"got {args.controls!r}") from None
     hold = hold_options(args)
+    if len(args.target) > 1 and args.b is not None:
+        raise CommandError("--b applies to the design of one target (several targets share "
+                           "the map's own b/L)")
     if len(args.target) > 1:  # one array, several shapes (issue 24)
         if hold:
             raise CommandError("--material, --orientation, --max-strain and --min-backload "
@@ -190,7 +197,8 @@ def run(args) -> int:
                            placement=args.placement, L_range=L_range, hL_range=hL_range,
                            min_barrier=args.min_barrier, state=args.unit_state,
                            max_units=args.max_units, theta_convention=args.theta_convention,
-                           verify=not args.no_verify, progress=progress, **hold)
+                           verify=not args.no_verify, progress=progress,
+                           b=None if args.b is None else args.b * 1e-3, **hold)
     written, shop_warnings = write_design(d, args, colours)
     print(d.summary())
     print_hold(d)

@@ -1,4 +1,4 @@
-"""A synthetic schema-2 map whose fields the interpolation reproduces exactly.
+"""A synthetic three-axis map (b/L = 0) whose fields the interpolation reproduces exactly.
 
 theta = 10 + 150 h + 3 ln t + 2 ln w and S = 1 - 0.5 h + 0.01 ln t are linear, and
 F_cr = 40 exp(2 h) t^-0.5 w^0.25 is log-linear, in the interpolation coordinates

@@ -12,7 +12,7 @@ from snapmorph.pipeline.dataset import write_netcdf
 def test_load_reads_a_map(dm, synthetic_path):
     assert dm.path == synthetic_path
     assert dm.ranges == {"h_over_L": (0.05, 0.5), "t_over_L": (0.0025, 0.01), "w_over_L": (0.02, 0.08)}
-    assert dm.samples == 17 and dm.attrs["schema_version"] == 2
+    assert dm.samples == 17 and dm.attrs["schema_version"] == 3  # written by today's pipeline
     assert dm.states == ("released", "actuated")
     assert "synthetic.nc" in repr(dm)
 
@@ -58,8 +58,8 @@ def test_corrupt_files(tmp_path, synthetic_path):
 
 def test_wrong_schema_versions(tmp_path):
     ds = synthetic_dataset()
-    ds.attrs["schema_version"] = np.int32(3)
-    _expect(_write(tmp_path, ds, "v3.nc"), "schema version 3 is newer than this snapmorph reads")
+    ds.attrs["schema_version"] = np.int32(4)
+    _expect(_write(tmp_path, ds, "v4.nc"), "schema version 4 is newer than this snapmorph reads")
     ds.attrs["schema_version"] = np.int32(0)
     _expect(_write(tmp_path, ds, "v0.nc"), "schema version 0 is not supported")
     del ds.attrs["schema_version"]

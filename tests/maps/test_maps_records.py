@@ -17,7 +17,7 @@ def paper_point():
 
 
 def test_schema_2_knows_timeouts_and_unstable_second_states():
-    assert SCHEMA_VERSION == 2
+    assert SCHEMA_VERSION == 3
     assert STATUS_CODES[4] == "timeout" and STATUS_CODES[5] == "second_state_unstable"
     assert set(RELEASED_VARS) <= set(FLOAT_VARS) and "theta_end" in FLOAT_VARS
     assert SHAPE_VARS == ("base_shape", "base_shape_released")

@@ -13,6 +13,21 @@ REPO = HERE.parents[1]
 import fake_unit_solver as fake
 
 FAKE = "fake_unit_solver:solve"
+#: the unit kind whose "ci" grid is the fake solver's three-axis grid (see `fake_kind`)
+FAKE_CI_KIND = "pipeline_testing:fake_kind"
+
+
+def _fake_ci():
+    """The grid the machinery tests build with the fake solver: the CI grid of the three-axis
+    maps (4 x 3 x 2 points at b/L = 0), where the fake's failing points sit. (The CI preset has
+    a b/L axis since schema 3: 48 points.)"""
+    from snapmorph.pipeline.kinds.unit import Grid
+
+    return Grid(h_over_L=(0.10, 0.20, 0.30, 0.40), t_over_L=(0.005, 0.0075, 0.01),
+                w_over_L=(0.04, 0.06), name="ci")
+
+
+CI = _fake_ci()
 
 
 def fake_kind():
@@ -22,7 +37,8 @@ def fake_kind():
 
     from snapmorph.pipeline.solvers import get_spec
 
-    return dataclasses.replace(get_spec("unit"), sources=())
+    spec = get_spec("unit")
+    return dataclasses.replace(spec, sources=(), presets={**spec.presets, "ci": _fake_ci})
 
 
 def load(path):

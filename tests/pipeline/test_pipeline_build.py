@@ -17,7 +17,7 @@ from snapmorph.maps.schema import FLAG_VARS, FLOAT_VARS, REQUIRED_ATTRS, SCHEMA_
 from snapmorph.pipeline import preset
 from snapmorph.units.status import NAME as STATUS_CODES
 
-CI = preset("ci")
+from pipeline_testing import CI  # noqa: E402  (the three-axis CI grid of the fake solver)
 
 
 @pytest.fixture(scope="module")

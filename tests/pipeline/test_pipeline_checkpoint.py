@@ -16,7 +16,7 @@ from snapmorph.pipeline.fingerprint import block_checksum
 from snapmorph.pipeline import preset
 from snapmorph.pipeline.solvers import get_spec
 
-CI = preset("ci")
+from pipeline_testing import CI  # noqa: E402  (the three-axis CI grid of the fake solver)
 COORDS = CI.points()
 KEYS = get_spec("unit").block_keys()
 KIND = fake_kind()

@@ -6,7 +6,7 @@ import sys
 import pytest
 import xarray as xr
 
-from pipeline_testing import FAKE, REPO
+from pipeline_testing import FAKE, FAKE_CI_KIND, REPO
 from snapmorph.pipeline.dataset import write_netcdf
 from snapmorph.maps.schema import SCHEMA_VERSION
 from snapmorph.cli import main
@@ -15,7 +15,7 @@ from snapmorph.cli import main
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
     out = tmp_path_factory.mktemp("cli") / "ci.nc"
-    rc = main(["maps", "build", "--grid", "ci", "--out", str(out), "--solver", FAKE,
+    rc = main(["maps", "build", "--grid", "ci", "--out", str(out), "--solver", FAKE, "--kind", FAKE_CI_KIND,
                "--workers", "2", "--no-progress", "--max-failed", "2"])
     assert rc == 0
     return out
@@ -34,7 +34,7 @@ def test_help_is_fast_and_lists_the_subcommands():
 
 def test_build_prints_a_summary(built, capsys):
     out = built.with_name("again.nc")
-    assert main(["maps", "build", "--grid", "ci", "--out", str(out), "--solver", FAKE,
+    assert main(["maps", "build", "--grid", "ci", "--out", str(out), "--solver", FAKE, "--kind", FAKE_CI_KIND,
                  "--workers", "1", "--no-progress", "--max-failed", "2"]) == 0
     text = capsys.readouterr().out
     assert f"wrote {out}: 24 points (ok 16, monostable 6, not_converged 2)" in text
@@ -42,7 +42,7 @@ def test_build_prints_a_summary(built, capsys):
 
 
 def test_check_passes_on_an_identical_map(built, capsys):
-    assert main(["maps", "check", "--grid", "ci", "--against", str(built), "--solver", FAKE,
+    assert main(["maps", "check", "--grid", "ci", "--against", str(built), "--solver", FAKE, "--kind", FAKE_CI_KIND,
                  "--workers", "2", "--no-progress"]) == 0
     assert "OK: the recomputed ci grid matches" in capsys.readouterr().out
 
@@ -55,7 +55,7 @@ def test_check_reports_differing_variables_and_points(built, tmp_path, capsys):
     ds["base_shape"].loc[dict(h_over_L=0.3, t_over_L=0.01, w_over_L=0.04, sample=30, xz="z")] *= 1.01
     bad = tmp_path / "tampered.nc"
     write_netcdf(ds, bad)
-    rc = main(["maps", "check", "--grid", "ci", "--against", str(bad), "--solver", FAKE,
+    rc = main(["maps", "check", "--grid", "ci", "--against", str(bad), "--solver", FAKE, "--kind", FAKE_CI_KIND,
                "--workers", "2", "--no-progress"])
     out = capsys.readouterr().out
     assert rc == 1
@@ -72,7 +72,7 @@ def test_check_with_loose_tolerance_passes(built, tmp_path, capsys):
     ds["F_cr"] = ds["F_cr"] * (1 + 1e-5)
     path = tmp_path / "close.nc"
     write_netcdf(ds, path)
-    args = ["maps", "check", "--grid", "ci", "--against", str(path), "--solver", FAKE, "--workers", "1",
+    args = ["maps", "check", "--grid", "ci", "--against", str(path), "--solver", FAKE, "--kind", FAKE_CI_KIND, "--workers", "1",
             "--no-progress"]
     assert main(args) == 1
     assert main(args + ["--rtol", "1e-4"]) == 0

@@ -16,7 +16,7 @@ from snapmorph.pipeline.checkpoint import checkpoint_dir
 from snapmorph.pipeline.compare import compare_maps
 from snapmorph.pipeline import preset
 
-CI = preset("ci")
+from pipeline_testing import CI  # noqa: E402  (the three-axis CI grid of the fake solver)
 
 
 def wait_for(predicate, timeout, what):

@@ -37,7 +37,7 @@ def test_stored_values_are_the_normalised_simulation(ci_map):
     serve every size and material."""
     ds, _ = ci_map
     h, t, w = 0.3, 0.0075, 0.04
-    stored = ds.sel(h_over_L=h, t_over_L=t, w_over_L=w)
+    stored = ds.sel(h_over_L=h, t_over_L=t, w_over_L=w, b_over_L=0.0)
     assert int(stored.status) == 0
     res = int(ds.attrs["resolution"])
     for L, E in ((0.1, 2.2e9), (0.25, 3.0e9)):
@@ -57,7 +57,7 @@ def test_stored_values_are_the_normalised_simulation(ci_map):
 def test_base_shape_frame_agrees_with_theta(ci_map):
     ds, _ = ci_map
     for h in CI.h_over_L:
-        p = ds.sel(h_over_L=h, t_over_L=0.005, w_over_L=0.06)
+        p = ds.sel(h_over_L=h, t_over_L=0.005, w_over_L=0.06, b_over_L=0.0)
         if int(p.status) != 0:
             continue
         xy = p.base_shape.values

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import fake_unit_solver as fake
-from pipeline_testing import FAKE, REPO, assert_matches_fake, fake_kind, load, sha, subprocess_env
+from pipeline_testing import FAKE, FAKE_CI_KIND, REPO, assert_matches_fake, fake_kind, load, sha, subprocess_env
 from snapmorph.pipeline.build import allowed_failures, build_map, parse_max_failed
 from snapmorph.pipeline.checkpoint import checkpoint_dir
 from snapmorph.pipeline import preset
@@ -16,7 +16,7 @@ from snapmorph.pipeline.solvers import get_spec
 from snapmorph.units.status import TIMEOUT
 from snapmorph.cli import main
 
-CI = preset("ci")
+from pipeline_testing import CI  # noqa: E402  (the three-axis CI grid of the fake solver)
 SLOW = (0.2, 0.005, 0.06)  # a bistable point of the CI grid
 
 
@@ -161,7 +161,7 @@ def test_bad_max_failed(value):
 
 def test_exit_status_follows_failed_points(tmp_path, capsys):
     out = tmp_path / "m.nc"
-    base = ["maps", "build", "--grid", "ci", "--out", str(out), "--solver", FAKE, "--workers", "2",
+    base = ["maps", "build", "--grid", "ci", "--out", str(out), "--solver", FAKE, "--kind", FAKE_CI_KIND, "--workers", "2",
             "--no-progress"]
     assert main(base) == 1  # 2 of 24 fake points fail, none allowed
     text = capsys.readouterr().out
@@ -225,12 +225,12 @@ def test_bad_output_paths(tmp_path, capsys):
     plain = tmp_path / "plain.txt"
     plain.write_text("a file\n")
     for out, why in ((plain / "m.nc", "is a file, not a folder"), (tmp_path, "is a folder")):
-        assert main(["maps", "build", "--grid", "ci", "--out", str(out), "--solver", FAKE]) == 2
+        assert main(["maps", "build", "--grid", "ci", "--out", str(out), "--solver", FAKE, "--kind", FAKE_CI_KIND]) == 2
         err = capsys.readouterr().err
         assert len(err.strip().splitlines()) == 1 and "--out" in err and why in err, err
     # missing folders are created (the rule of every command)
     deep = tmp_path / "new" / "folder" / "m.nc"
-    assert main(["maps", "build", "--grid", "ci", "--out", str(deep), "--solver", FAKE,
+    assert main(["maps", "build", "--grid", "ci", "--out", str(deep), "--solver", FAKE, "--kind", FAKE_CI_KIND,
                  "--workers", "1", "--no-progress", "--max-failed", "2"]) == 0
     assert deep.exists()
 
@@ -238,7 +238,7 @@ def test_bad_output_paths(tmp_path, capsys):
 def test_unreachable_scheduler_fails_fast_with_one_line(tmp_path):
     t0 = time.monotonic()
     r = subprocess.run([sys.executable, "-m", "snapmorph", "maps", "build", "--grid", "ci", "--out",
-                        str(tmp_path / "m.nc"), "--solver", FAKE, "--scheduler", "tcp://127.0.0.1:1"],
+                        str(tmp_path / "m.nc"), "--solver", FAKE, "--kind", FAKE_CI_KIND, "--scheduler", "tcp://127.0.0.1:1"],
                        cwd=REPO, env=subprocess_env(), capture_output=True, text=True, timeout=120)
     elapsed = time.monotonic() - t0
     assert r.returncode == 2, r.stdout + r.stderr

@@ -84,7 +84,7 @@ def test_resume_with_another_kind(tmp_path, monkeypatch):
 
 def test_registry():
     assert "unit" in kinds() and "unit2d" in kinds()
-    assert get_spec().name == "unit" and get_spec("unit").dims == ("h_over_L", "t_over_L", "w_over_L")
+    assert get_spec().name == "unit" and get_spec("unit").dims == ("h_over_L", "t_over_L", "w_over_L", "b_over_L")
     spec = register(SolverSpec(name="fake2d-registered", solve="fake_unit2d:solve",
                                dims=("h_over_L", "t_over_L"), float_vars={"F_cr": ("1", "F")}))
     assert get_spec("fake2d-registered") is spec
