@@ -1,0 +1,440 @@
+"""Sparse symmetric LDL^T with its inertia, for structures whose band is hopeless (sheets).
+
+The banded LDL^T of `solver.banded` costs what the envelope of K holds: linear in the DOFs
+for a rod structure that is long in one direction (a unit), but a sheet tiled from units in
+two directions has an envelope of width ~ its side, and the factor grows like n^2. Here the
+same matrix is factorised in compressed sparse column form after a fill-reducing ordering
+(approximate minimum degree), with QDLDL (`qdldl` on PyPI: a wheel, no system library) —
+LDL^T without pivoting, like the banded path, so Sylvester's count of negative pivots is the
+number of negative eigenvalues (the stability count) for free.
+
+Pattern once, values many times:
+
+- `SparseLDLT(n, *element_dofs)` builds the upper-triangular CSC pattern of K from the same
+  reduced element DOF lists (arrays (n_elements, k), -1 for held DOFs) as
+  `solver.banded.envelope_heights`, plus one entry map per element array: for every element
+  e and local pair (a, b) the index into ``data`` that the band scatter would have added
+  ``h[a, b]`` to (``band[ra - rb, rb]`` for rb <= ra becomes ``data[maps[e, a, b]]``; -1
+  where nothing is added). A compiled assembly writes straight into ``data``
+  (`scatter_element`, `assemble_system3d_csc`).
+- The constructor also runs the ordering and the symbolic analysis (elimination tree,
+  column counts: ``nnz_factor``, ``factor_flops``) once, on stand-in values (the identity on
+  the pattern, so that no value of K can make it fail); every `factor()` is numeric only.
+- `factor()` returns (status, negative pivots, min pivot ratio) as `solver.banded.ldlt_factor`
+  does and sets ``negative_eigenvalues``; `solve(rhs)` for (n,) or (n, m).
+
+`choose_factorisation` decides between the banded and the sparse path by the measured
+crossover (bench/bench_sparse.py, docs/sparse.md). Nothing here is wired into the drivers.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse
+from numba import njit
+
+from snapmorph.solver.assembly3d import _PAIR_P, _PAIR_SIGN, frame_jets
+from snapmorph.solver.energies3d import pair_edge_scratch, pair_terms_edges, stretch_terms
+
+#: a pivot smaller than this times the largest diagonal entry of K: numerically singular
+#: (the banded path's `solver.system.PIVOT_TOL`)
+PIVOT_TOL = 1e-13
+
+#: cost model of the two factorisations, used by `choose_factorisation` (fitted to
+#: bench/bench_sparse.py on the units and sheets: 2-core AMD EPYC, one thread): the banded
+#: LDL^T of `solver.banded` costs BANDED_NS_PER_FLOP per flop of its envelope (sum over the
+#: columns of height^2 / 2; ~5 GF/s, vectorised) plus BANDED_NS_PER_DOF per column; QDLDL
+#: costs SPARSE_NS_PER_FLOP per flop (sum over the columns of L of their count^2; ~3 GF/s)
+#: plus SPARSE_NS_PER_ENTRY per entry of L (its scalar up-looking loops, the copy of D) plus
+#: SPARSE_CALL_NS per call
+BANDED_NS_PER_FLOP = 0.2
+BANDED_NS_PER_DOF = 80.0
+SPARSE_NS_PER_FLOP = 0.34
+SPARSE_NS_PER_ENTRY = 13.0
+SPARSE_CALL_NS = 20_000.0
+#: `choose_factorisation` without a sparse analysis: "sparse" above both (measured crossover:
+#: the 3-D unit has 80-150 envelope flops per entry of K and stays banded, a strip of cells
+#: ~75, sheets of 2 x 2 cells ~120 (a tie), 2 x 16 ~230 (sparse 1.4x faster), 4 x 4 ~430)
+SPARSE_WITHOUT_ANALYSIS_FLOPS = 2e6
+ENVELOPE_FLOPS_PER_NNZ = 200.0
+
+
+# ---------------------------------------------------------------------------- pattern
+
+
+def csc_pattern(n, *element_dofs):
+    """(indptr, indices) int64 of the upper triangle (row <= column, rows sorted within each
+    column, every diagonal entry present) of an n x n matrix assembled from elements with
+    the reduced DOF lists ``element_dofs`` (arrays (n_elements, k), -1 for held DOFs)."""
+    dofs = [np.ascontiguousarray(d, dtype=np.int64) for d in element_dofs if np.size(d)]
+    counts = np.ones(n, dtype=np.int64)  # the diagonal
+    for d in dofs:
+        _count_entries(d, counts)
+    start = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(counts, out=start[1:])
+    rows = np.empty(start[-1], dtype=np.int64)
+    fill = start[:-1].copy()
+    rows[fill] = np.arange(n)
+    fill += 1
+    for d in dofs:
+        _fill_entries(d, rows, fill)
+    return _compact_columns(start, rows)
+
+
+@njit(cache=True)
+def _count_entries(dofs, counts):
+    for e in range(dofs.shape[0]):
+        for a in range(dofs.shape[1]):
+            ra = dofs[e, a]
+            if ra < 0:
+                continue
+            for b in range(dofs.shape[1]):
+                rb = dofs[e, b]
+                if 0 <= rb <= ra:
+                    counts[ra] += 1
+
+
+@njit(cache=True)
+def _fill_entries(dofs, rows, fill):
+    for e in range(dofs.shape[0]):
+        for a in range(dofs.shape[1]):
+            ra = dofs[e, a]
+            if ra < 0:
+                continue
+            for b in range(dofs.shape[1]):
+                rb = dofs[e, b]
+                if 0 <= rb <= ra:
+                    rows[fill[ra]] = rb
+                    fill[ra] += 1
+
+
+@njit(cache=True)
+def _compact_columns(start, rows):
+    """Sort every column's rows and drop repeats: the CSC arrays."""
+    n = start.shape[0] - 1
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    out = np.empty(rows.shape[0], dtype=np.int64)
+    m = 0
+    for c in range(n):
+        col = np.sort(rows[start[c]:start[c + 1]])
+        last = -1
+        for r in col:
+            if r != last:
+                out[m] = r
+                m += 1
+                last = r
+        indptr[c + 1] = m
+    return indptr, out[:m].copy()
+
+
+@njit(cache=True)
+def _find(indptr, indices, row, col):
+    lo = indptr[col]
+    hi = indptr[col + 1]
+    while lo < hi:  # binary search: rows are sorted within a column
+        mid = (lo + hi) >> 1
+        if indices[mid] < row:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True)
+def entry_map(dofs, indptr, indices):
+    """(n_elements, k, k) int64: for element e and local coordinates (a, b) with reduced DOFs
+    ra = dofs[e, a], rb = dofs[e, b] >= 0 and rb <= ra, the index into the CSC data of the
+    upper-triangle entry (row rb, column ra); -1 otherwise. The banded scatter adds h[a, b]
+    to ``band[ra - rb, rb]`` under the same condition, so both store the same W^T K W
+    (tied DOFs inside one element included: both (a, b) and (b, a) reach the diagonal)."""
+    ne, k = dofs.shape
+    out = -np.ones((ne, k, k), dtype=np.int64)
+    for e in range(ne):
+        for a in range(k):
+            ra = dofs[e, a]
+            if ra < 0:
+                continue
+            for b in range(k):
+                rb = dofs[e, b]
+                if rb < 0 or rb > ra:
+                    continue
+                out[e, a, b] = _find(indptr, indices, rb, ra)
+    return out
+
+
+@njit(cache=True)
+def scatter_element(data, emap, h, scale_a, scale_b):
+    """data[emap[a, b]] += scale_a[a] scale_b[b] h[a, b] for every mapped local pair: the
+    element scatter of an assembly that writes straight into the CSC values."""
+    k = emap.shape[0]
+    for a in range(k):
+        for b in range(k):
+            i = emap[a, b]
+            if i >= 0:
+                data[i] += scale_a[a] * scale_b[b] * h[a, b]
+
+
+@njit(cache=True)
+def band_to_csc_data(band, indptr, indices, data):
+    """The CSC values (upper triangle) of a matrix held in lower band storage
+    (``band[k, j] = K[j + k, j]``); entries outside the band are zero."""
+    bw = band.shape[0] - 1
+    n = indptr.shape[0] - 1
+    for c in range(n):
+        for p in range(indptr[c], indptr[c + 1]):
+            k = c - indices[p]
+            data[p] = band[k, indices[p]] if k <= bw else 0.0
+    return data
+
+
+# ---------------------------------------------------------------------------- 3-D assembly
+
+
+@njit(cache=True)
+def _scatter_stretch(full, red, emap, g, h, dof_scale, data, grad_red, grad_full):
+    for a in range(6):
+        fa = full[a]
+        if fa < 0:
+            continue
+        grad_full[fa] += g[a]
+        ra = red[a]
+        if ra < 0:
+            continue
+        ca = dof_scale[fa]
+        grad_red[ra] += ca * g[a]
+        for b in range(6):
+            i = emap[a, b]
+            if i >= 0:
+                data[i] += ca * dof_scale[full[b]] * h[a, b]
+
+
+@njit(cache=True)
+def _scatter_pair(full, red, emap, g8, h8, dof_scale, data, grad_red, grad_full):
+    for a in range(14):
+        fa = full[a]
+        if fa < 0:
+            continue
+        pa = _PAIR_P[a]
+        ga = _PAIR_SIGN[a] * g8[pa]
+        grad_full[fa] += ga
+        ra = red[a]
+        if ra < 0:
+            continue
+        ca = dof_scale[fa] * _PAIR_SIGN[a]
+        grad_red[ra] += dof_scale[fa] * ga
+        for b in range(14):
+            i = emap[a, b]
+            if i >= 0:
+                data[i] += ca * dof_scale[full[b]] * _PAIR_SIGN[b] * h8[pa, _PAIR_P[b]]
+
+
+@njit(cache=True)
+def assemble_system3d_csc(q, n_nodes, edge_nodes, src_t, src_d, stretch_params, pair_edges,
+                          pair_signs, pair_params, stretch_full, stretch_red, pair_full,
+                          pair_red, dof_scale, stretch_map, pair_map, data, grad_red,
+                          grad_full, vals, jacs, hesss):
+    """`solver.assembly3d.assemble_system3d_ws` writing K into CSC values ``data`` (the
+    upper triangle of a `SparseLDLT` pattern) through the entry maps of its stretch and pair
+    DOF lists instead of into a band. Energy (J); the same gradients."""
+    data[:] = 0.0
+    grad_red[:] = 0.0
+    grad_full[:] = 0.0
+    energy = 0.0
+    frame_jets(q, n_nodes, edge_nodes, src_t, src_d, vals, jacs, hesss)
+    x6 = np.empty(6)
+    g6 = np.empty(6)
+    h6 = np.empty((6, 6))
+    for j in range(stretch_params.shape[0]):
+        for k in range(6):
+            x6[k] = q[stretch_full[j, k]]
+        energy += stretch_terms(x6, stretch_params[j, 0], stretch_params[j, 1], g6, h6)
+        _scatter_stretch(stretch_full[j], stretch_red[j], stretch_map[j], g6, h6, dof_scale,
+                         data, grad_red, grad_full)
+    g8 = np.empty(8)
+    h8 = np.empty((8, 8))
+    ws = pair_edge_scratch()
+    for p in range(pair_edges.shape[0]):
+        ea = pair_edges[p, 0]
+        eb = pair_edges[p, 1]
+        energy += pair_terms_edges(vals[ea], jacs[ea], hesss[ea], pair_signs[p, 0], vals[eb],
+                                   jacs[eb], hesss[eb], pair_signs[p, 1], pair_params[p, 0],
+                                   pair_params[p, 1], pair_params[p, 2], pair_params[p, 3],
+                                   pair_params[p, 4], pair_params[p, 5], g8, h8, ws)
+        _scatter_pair(pair_full[p], pair_red[p], pair_map[p], g8, h8, dof_scale, data,
+                      grad_red, grad_full)
+    return energy
+
+
+# ---------------------------------------------------------------------------- factorisation
+
+
+class SparseLDLT:
+    """LDL^T without pivoting of a symmetric sparse K (reduced DOFs) with a fill-reducing
+    ordering, its inertia and solves; the pattern and the symbolic analysis are built once.
+
+    ``n``: reduced DOFs; ``element_dofs``: the element DOF lists of the assembly (arrays
+    (n_elements, k) int, -1 for held DOFs), as for `solver.banded.envelope_heights`.
+
+    Members: ``indptr``, ``indices`` (upper-triangle CSC pattern, diagonal last in each
+    column), ``data`` (its values: the assembly writes here, through ``maps[i]`` for
+    ``element_dofs[i]``, see `entry_map`), ``negative_eigenvalues``, ``factor_ok``,
+    ``min_pivot_ratio`` (min |D| / max |diag K| of the last factorisation), ``nnz_factor``
+    (entries of L below the diagonal) and ``factor_flops`` (sum of L's column counts squared).
+
+    Uses QDLDL (package `qdldl`): approximate minimum degree ordering, elimination tree and
+    column counts once (at construction, on a stand-in matrix of the same pattern, so that
+    no value of K can make the analysis fail), then an up-looking numeric LDL^T per
+    `factor`. Deterministic and single-threaded: the same K gives the same bits (not the
+    banded path's bits: another elimination order).
+    """
+
+    def __init__(self, n, *element_dofs):
+        import qdldl  # noqa: PLC0415 - imported where used: a dependency of this path only
+
+        self.n = int(n)
+        if self.n < 1:
+            raise ValueError(f"n (reduced DOFs) must be >= 1; got {n!r}")
+        dofs = tuple(np.ascontiguousarray(d, dtype=np.int64).reshape(len(d), -1 if len(d) else 0)
+                     for d in element_dofs)
+        self.indptr, self.indices = csc_pattern(self.n, *dofs)
+        self.maps = tuple(entry_map(d, self.indptr, self.indices) for d in dofs)
+        self.diagonal = self.indptr[1:] - 1
+        # the matrix handed to QDLDL shares ``data``; QDLDL reads only its values on refactor
+        self._U = scipy.sparse.csc_matrix(
+            (np.zeros(self.indices.shape[0]), self.indices, self.indptr), shape=(self.n, self.n))
+        self.data = self._U.data
+        self.data[self.diagonal] = 1.0  # stand-in values: the identity on the pattern
+        self._solver = qdldl.Solver(self._U, upper=True)
+        L, _, _ = self._solver.factors()
+        counts = np.diff(L.indptr).astype(float)
+        self.nnz_factor = int(L.nnz)
+        self.factor_flops = float(np.dot(counts, counts))
+        self.data[:] = 0.0
+        self.negative_eigenvalues = 0
+        self.factor_ok = False
+        self.min_pivot_ratio = 0.0
+
+    @classmethod
+    def for_system(cls, system):
+        """The sparse factorisation of a `solver.system.ReducedSystem` or a
+        `solver.system3d.RodSystem3D` (its element DOF lists; not wired into the system)."""
+        if hasattr(system, "element_dofs"):  # 3-D: (stretch full, stretch red, pair full, pair red)
+            return cls(system.n, system.element_dofs[1], system.element_dofs[3])
+        return cls(system.n, *system.dofs)
+
+    # ------------------------------------------------------------------ values
+    def clear(self):
+        """Zero the values (before an assembly that adds into ``data``)."""
+        self.data[:] = 0.0
+
+    def from_band(self, band):
+        """Take the values of a matrix in lower band storage (`solver.banded`) on this
+        pattern (entries of the band outside the pattern must be zero)."""
+        band_to_csc_data(band, self.indptr, self.indices, self.data)
+
+    def from_dense(self, K):
+        """Take the values of a dense symmetric (n, n) matrix on this pattern (tests)."""
+        K = np.asarray(K, dtype=float)
+        cols = np.repeat(np.arange(self.n), np.diff(self.indptr))
+        self.data[:] = K[self.indices, cols]
+
+    def matrix(self):
+        """The full symmetric K (scipy CSC) of the current values."""
+        U = scipy.sparse.csc_matrix((self.data.copy(), self.indices, self.indptr),
+                                    shape=(self.n, self.n))
+        return (U + scipy.sparse.triu(U, k=1).T).tocsc()
+
+    # ------------------------------------------------------------------ factor / solve
+    def factor(self, pivot_tol=PIVOT_TOL):
+        """Factorise the current values (the pattern's analysis is reused).
+
+        Returns (status, negative_pivots, min_abs_pivot_ratio) as `solver.banded.ldlt_factor`:
+        status 0 done (``negative_eigenvalues`` is the inertia count); 1 a pivot below
+        ``pivot_tol`` times the largest diagonal entry, or a non-finite one (numerically
+        singular without pivoting: the count is then unreliable and the caller falls back,
+        e.g. to a shifted factorisation or a dense eigensolver for small n)."""
+        diag = self.data[self.diagonal]
+        scale = float(np.max(np.abs(diag)))
+        self.factor_ok = False
+        if not (scale > 0.0 and np.isfinite(scale)) or not np.all(np.isfinite(self.data)):
+            self.min_pivot_ratio = 0.0
+            return 1, 0, 0.0
+        self._solver.update(self._U, upper=True)
+        D = self._solver.factors()[1]
+        negative = int(np.count_nonzero(D < 0.0))
+        # an exact zero pivot stops QDLDL's factorisation (later pivots are stale): it shows
+        # as a ratio of 0 here; NaN also fails the test
+        ratio = float(np.min(np.abs(D))) / scale
+        self.min_pivot_ratio = ratio
+        if not ratio > pivot_tol:
+            return 1, negative, ratio
+        self.negative_eigenvalues = negative
+        self.factor_ok = True
+        return 0, negative, ratio
+
+    def solve(self, rhs):
+        """Solve K X = rhs for rhs (n,) or (n, m) with the last factorisation; a new array."""
+        if not self.factor_ok:
+            raise RuntimeError("solve needs a successful factor() first")
+        b = np.asarray(rhs, dtype=float)
+        if b.shape[0] != self.n or b.ndim not in (1, 2):
+            raise ValueError(f"rhs must have shape ({self.n},) or ({self.n}, m); got {b.shape}")
+        if b.ndim == 1:
+            return self._solver.solve(np.ascontiguousarray(b))
+        out = np.empty_like(b)
+        for c in range(b.shape[1]):
+            out[:, c] = self._solver.solve(np.ascontiguousarray(b[:, c]))
+        return out
+
+
+def assemble3d(system, factorisation, q):
+    """Assemble the 3-D rod system's energy (J), gradients and K at ``q`` with K written
+    straight into ``factorisation.data`` (a `SparseLDLT.for_system(system)`) instead of the
+    system's band; the gradients go to ``system.grad`` / ``system.grad_full`` as usual."""
+    m = system.model_arrays
+    return assemble_system3d_csc(
+        np.ascontiguousarray(q, dtype=float), m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7],
+        m[8], m[9], m[10], m[11], system.dof_scale, factorisation.maps[0],
+        factorisation.maps[1], factorisation.data, system.grad, system.grad_full, m[12], m[13],
+        m[14])
+
+
+# ---------------------------------------------------------------------------- the choice
+
+
+def envelope_flops(heights):
+    """Flops of the banded LDL^T within the envelope ``heights`` (sum of height^2 / 2, as
+    `solver.ordering.envelope_cost`)."""
+    h = np.asarray(heights, dtype=float)
+    return 0.5 * float(np.dot(h, h))
+
+
+def factorisation_costs(n, heights, factor_flops, nnz_factor):
+    """(banded s, sparse s): the cost model's estimate of one factorisation by each path."""
+    banded = 1e-9 * (BANDED_NS_PER_FLOP * envelope_flops(heights) + BANDED_NS_PER_DOF * n)
+    sparse = 1e-9 * (SPARSE_NS_PER_FLOP * factor_flops + SPARSE_NS_PER_ENTRY * nnz_factor
+                     + SPARSE_CALL_NS)
+    return banded, sparse
+
+
+def choose_factorisation(n, heights, nnz=None, factor_flops=None, nnz_factor=None):
+    """"banded" or "sparse" for a system of ``n`` reduced DOFs whose banded envelope has the
+    column ``heights`` (`solver.banded.envelope_heights`).
+
+    With the sparse factor's size known (``factor_flops``, ``nnz_factor``: the members of a
+    `SparseLDLT`, whose analysis costs about one factorisation) the cheaper path by the
+    measured cost model (`factorisation_costs`; the banded path wins ties, it has the
+    compiled fused iterations). Without them, from the envelope alone: "sparse" when the
+    banded factor would cost more than SPARSE_WITHOUT_ANALYSIS_FLOPS flops and more than
+    ENVELOPE_FLOPS_PER_NNZ flops per entry of K (``nnz``, upper triangle; default ~12 n):
+    rod structures long in one direction (units, strips of cells) have a thin envelope and
+    stay banded, sheets of cells in two directions go sparse."""
+    if factor_flops is not None and nnz_factor is not None:
+        banded, sparse = factorisation_costs(n, heights, factor_flops, nnz_factor)
+        return "sparse" if sparse < banded else "banded"
+    work = envelope_flops(heights)
+    nnz = 12 * n if nnz is None else nnz
+    if work > SPARSE_WITHOUT_ANALYSIS_FLOPS and work > ENVELOPE_FLOPS_PER_NNZ * nnz:
+        return "sparse"
+    return "banded"
+
