@@ -24,10 +24,15 @@ Pattern once, values many times:
   does and sets ``negative_eigenvalues``; `solve(rhs)` for (n,) or (n, m).
 
 `choose_factorisation` decides between the banded and the sparse path by the measured
-crossover (bench/bench_sparse.py, docs/sparse.md). Nothing here is wired into the drivers.
+crossover (bench/bench_sparse.py, docs/sparse.md); `system_factorisation` is what every
+`solver.system.BandedSystem` asks when it is built (the one choice point: its `factor` and
+`solve` then use the path chosen), and `use_factorisation("banded"|"sparse")` overrides it
+for the systems built inside a ``with`` block (tests, benchmarks).
 """
 
 from __future__ import annotations
+
+import contextlib
 
 import numpy as np
 import scipy.sparse
@@ -438,3 +443,40 @@ def choose_factorisation(n, heights, nnz=None, factor_flops=None, nnz_factor=Non
         return "sparse"
     return "banded"
 
+
+
+#: the factorisations a system can use (`use_factorisation`)
+FACTORISATIONS = ("banded", "sparse")
+_override = [None]  # the kind forced by `use_factorisation` (None: chosen by size)
+
+
+@contextlib.contextmanager
+def use_factorisation(kind):
+    """Systems built inside the ``with`` block use the factorisation ``kind`` ("banded" or
+    "sparse"; None: chosen by size and structure, the default) whatever their size: the
+    explicit override of `system_factorisation` for tests and benchmarks."""
+    if kind is not None and kind not in FACTORISATIONS:
+        raise ValueError(f"kind (factorisation) must be one of {FACTORISATIONS} or None; "
+                         f"got {kind!r}")
+    before = _override[0]
+    _override[0] = kind
+    try:
+        yield
+    finally:
+        _override[0] = before
+
+
+def system_factorisation(n, heights, *element_dofs):
+    """"banded" or "sparse": the factorisation of a system of ``n`` reduced DOFs whose banded
+    envelope has the column ``heights`` and whose elements have the reduced DOF lists
+    ``element_dofs`` (the override of `use_factorisation` first). The pattern is counted
+    only when the envelope alone could make the sparse path worth it (a unit's systems are
+    built many times: they pay nothing for the question), and then `choose_factorisation`
+    decides from the envelope and the pattern's size."""
+    if _override[0] is not None:
+        return _override[0]
+    if n < 2 or envelope_flops(heights) <= SPARSE_WITHOUT_ANALYSIS_FLOPS:
+        return "banded"
+    dofs = [np.ascontiguousarray(d, dtype=np.int64) for d in element_dofs if np.size(d)]
+    nnz = int(csc_pattern(int(n), *dofs)[1].shape[0])
+    return choose_factorisation(int(n), heights, nnz)

@@ -200,3 +200,54 @@ def test_choice_keeps_units_banded_and_takes_sheets_sparse(unit3d):
     strip = sheet_structure(12, 1).reduced_system()  # a long strip: thin envelope
     f = SparseLDLT.for_system(strip)
     assert choose_factorisation(strip.n, strip.heights, f.indices.size) == "banded"
+
+
+def test_systems_choose_their_factorisation_and_the_override_forces_one(unit3d):
+    from bench.bench_sparse import sheet_structure
+    from snapmorph.solver.sparse import use_factorisation
+
+    assert unit3d.reduced_system().factorisation == "banded"  # units keep the banded path
+    assert sheet_structure(4, 4).reduced_system().factorisation == "sparse"
+    with use_factorisation("sparse"):
+        assert unit3d.reduced_system().factorisation == "sparse"
+        with use_factorisation("banded"):
+            assert sheet_structure(2, 2).reduced_system().factorisation == "banded"
+    assert unit3d.reduced_system().factorisation == "banded"
+    with pytest.raises(ValueError, match="kind"):
+        with use_factorisation("cholesky"):
+            pass
+
+
+def test_sparse_system_factor_solve_and_inertia_match_the_banded_one(unit3d):
+    from snapmorph.solver.sparse import use_factorisation
+
+    st = unit3d
+    q = st.initial_state()
+    n3 = 3 * st.n_nodes
+    q[:n3] += 2e-4 * np.random.default_rng(5).normal(size=n3)
+    banded = st.reduced_system()
+    with use_factorisation("sparse"):
+        sparse = st.reduced_system()
+    banded.evaluate(q)
+    sparse.evaluate(q)
+    assert banded.factor() and sparse.factor()
+    assert sparse.negative_eigenvalues == banded.negative_eigenvalues > 0
+    b = np.random.default_rng(6).normal(size=banded.n)
+    x = banded.solve(b)
+    np.testing.assert_allclose(sparse.solve(b), x, rtol=0, atol=1e-8 * np.abs(x).max())
+    # the fused (banded) iterations step aside: the drivers take the general path
+    assert sparse.fused_newton(q, 0.0, np.zeros(sparse.n), 1e-9)[0] == 1
+
+
+def test_2d_unit_pushed_on_the_sparse_path_gives_the_banded_results_within_round_off():
+    from snapmorph.solver.sparse import use_factorisation
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.unit2d import simulate_unit_2d
+
+    g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
+    banded = simulate_unit_2d(g, nodes=21, check_self_standing=False)
+    with use_factorisation("sparse"):
+        sparse = simulate_unit_2d(g, nodes=21, check_self_standing=False)
+    assert banded.bistable and sparse.bistable
+    assert sparse.F_cr == pytest.approx(banded.F_cr, rel=1e-9)
+    assert sparse.curvature == pytest.approx(banded.curvature, rel=1e-9)
