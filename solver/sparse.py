@@ -15,8 +15,8 @@ Pattern once, values many times:
   `solver.banded.envelope_heights`, plus one entry map per element array: for every element
   e and local pair (a, b) the index into ``data`` that the band scatter would have added
   ``h[a, b]`` to (``band[ra - rb, rb]`` for rb <= ra becomes ``data[maps[e, a, b]]``; -1
-  where nothing is added). A compiled assembly writes straight into ``data``
-  (`scatter_element`, `assemble_system3d_csc`).
+  where nothing is added), for a compiled assembly that writes straight into ``data``
+  (`scatter_element`); the systems assemble K in their band and copy it (`from_band`).
 - The constructor also runs the ordering and the symbolic analysis (elimination tree,
   column counts: ``nnz_factor``, ``factor_flops``) once, on stand-in values (the identity on
   the pattern, so that no value of K can make it fail); every `factor()` is numeric only.
@@ -38,8 +38,6 @@ import numpy as np
 import scipy.sparse
 from numba import njit
 
-from snapmorph.solver.assembly3d import _PAIR_P, _PAIR_SIGN, frame_jets
-from snapmorph.solver.energies3d import pair_edge_scratch, pair_terms_edges, stretch_terms
 
 #: a pivot smaller than this times the largest diagonal entry of K: numerically singular
 #: (the banded path's `solver.system.PIVOT_TOL`)
@@ -73,8 +71,9 @@ def csc_pattern(n, *element_dofs):
     the reduced DOF lists ``element_dofs`` (arrays (n_elements, k), -1 for held DOFs)."""
     dofs = [np.ascontiguousarray(d, dtype=np.int64) for d in element_dofs if np.size(d)]
     counts = np.ones(n, dtype=np.int64)  # the diagonal
+    none = np.zeros(0, dtype=np.int64)
     for d in dofs:
-        _count_entries(d, counts)
+        _walk_entries(d, counts, none, none, False)
     start = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(counts, out=start[1:])
     rows = np.empty(start[-1], dtype=np.int64)
@@ -82,12 +81,14 @@ def csc_pattern(n, *element_dofs):
     rows[fill] = np.arange(n)
     fill += 1
     for d in dofs:
-        _fill_entries(d, rows, fill)
+        _walk_entries(d, counts, rows, fill, True)
     return _compact_columns(start, rows)
 
 
 @njit(cache=True)
-def _count_entries(dofs, counts):
+def _walk_entries(dofs, counts, rows, fill, write):
+    """Every upper-triangle entry (row rb <= column ra) the elements ``dofs`` touch: counted
+    per column into ``counts`` (``write`` False) or its row written at ``fill[ra]``."""
     for e in range(dofs.shape[0]):
         for a in range(dofs.shape[1]):
             ra = dofs[e, a]
@@ -96,21 +97,11 @@ def _count_entries(dofs, counts):
             for b in range(dofs.shape[1]):
                 rb = dofs[e, b]
                 if 0 <= rb <= ra:
-                    counts[ra] += 1
-
-
-@njit(cache=True)
-def _fill_entries(dofs, rows, fill):
-    for e in range(dofs.shape[0]):
-        for a in range(dofs.shape[1]):
-            ra = dofs[e, a]
-            if ra < 0:
-                continue
-            for b in range(dofs.shape[1]):
-                rb = dofs[e, b]
-                if 0 <= rb <= ra:
-                    rows[fill[ra]] = rb
-                    fill[ra] += 1
+                    if write:
+                        rows[fill[ra]] = rb
+                        fill[ra] += 1
+                    else:
+                        counts[ra] += 1
 
 
 @njit(cache=True)
@@ -190,84 +181,6 @@ def band_to_csc_data(band, indptr, indices, data):
             k = c - indices[p]
             data[p] = band[k, indices[p]] if k <= bw else 0.0
     return data
-
-
-# ---------------------------------------------------------------------------- 3-D assembly
-
-
-@njit(cache=True)
-def _scatter_stretch(full, red, emap, g, h, dof_scale, data, grad_red, grad_full):
-    for a in range(6):
-        fa = full[a]
-        if fa < 0:
-            continue
-        grad_full[fa] += g[a]
-        ra = red[a]
-        if ra < 0:
-            continue
-        ca = dof_scale[fa]
-        grad_red[ra] += ca * g[a]
-        for b in range(6):
-            i = emap[a, b]
-            if i >= 0:
-                data[i] += ca * dof_scale[full[b]] * h[a, b]
-
-
-@njit(cache=True)
-def _scatter_pair(full, red, emap, g8, h8, dof_scale, data, grad_red, grad_full):
-    for a in range(14):
-        fa = full[a]
-        if fa < 0:
-            continue
-        pa = _PAIR_P[a]
-        ga = _PAIR_SIGN[a] * g8[pa]
-        grad_full[fa] += ga
-        ra = red[a]
-        if ra < 0:
-            continue
-        ca = dof_scale[fa] * _PAIR_SIGN[a]
-        grad_red[ra] += dof_scale[fa] * ga
-        for b in range(14):
-            i = emap[a, b]
-            if i >= 0:
-                data[i] += ca * dof_scale[full[b]] * _PAIR_SIGN[b] * h8[pa, _PAIR_P[b]]
-
-
-@njit(cache=True)
-def assemble_system3d_csc(q, n_nodes, edge_nodes, src_t, src_d, stretch_params, pair_edges,
-                          pair_signs, pair_params, stretch_full, stretch_red, pair_full,
-                          pair_red, dof_scale, stretch_map, pair_map, data, grad_red,
-                          grad_full, vals, jacs, hesss):
-    """`solver.assembly3d.assemble_system3d_ws` writing K into CSC values ``data`` (the
-    upper triangle of a `SparseLDLT` pattern) through the entry maps of its stretch and pair
-    DOF lists instead of into a band. Energy (J); the same gradients."""
-    data[:] = 0.0
-    grad_red[:] = 0.0
-    grad_full[:] = 0.0
-    energy = 0.0
-    frame_jets(q, n_nodes, edge_nodes, src_t, src_d, vals, jacs, hesss)
-    x6 = np.empty(6)
-    g6 = np.empty(6)
-    h6 = np.empty((6, 6))
-    for j in range(stretch_params.shape[0]):
-        for k in range(6):
-            x6[k] = q[stretch_full[j, k]]
-        energy += stretch_terms(x6, stretch_params[j, 0], stretch_params[j, 1], g6, h6)
-        _scatter_stretch(stretch_full[j], stretch_red[j], stretch_map[j], g6, h6, dof_scale,
-                         data, grad_red, grad_full)
-    g8 = np.empty(8)
-    h8 = np.empty((8, 8))
-    ws = pair_edge_scratch()
-    for p in range(pair_edges.shape[0]):
-        ea = pair_edges[p, 0]
-        eb = pair_edges[p, 1]
-        energy += pair_terms_edges(vals[ea], jacs[ea], hesss[ea], pair_signs[p, 0], vals[eb],
-                                   jacs[eb], hesss[eb], pair_signs[p, 1], pair_params[p, 0],
-                                   pair_params[p, 1], pair_params[p, 2], pair_params[p, 3],
-                                   pair_params[p, 4], pair_params[p, 5], g8, h8, ws)
-        _scatter_pair(pair_full[p], pair_red[p], pair_map[p], g8, h8, dof_scale, data,
-                      grad_red, grad_full)
-    return energy
 
 
 # ---------------------------------------------------------------------------- factorisation
@@ -390,18 +303,6 @@ class SparseLDLT:
         for c in range(b.shape[1]):
             out[:, c] = self._solver.solve(np.ascontiguousarray(b[:, c]))
         return out
-
-
-def assemble3d(system, factorisation, q):
-    """Assemble the 3-D rod system's energy (J), gradients and K at ``q`` with K written
-    straight into ``factorisation.data`` (a `SparseLDLT.for_system(system)`) instead of the
-    system's band; the gradients go to ``system.grad`` / ``system.grad_full`` as usual."""
-    m = system.model_arrays
-    return assemble_system3d_csc(
-        np.ascontiguousarray(q, dtype=float), m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7],
-        m[8], m[9], m[10], m[11], system.dof_scale, factorisation.maps[0],
-        factorisation.maps[1], factorisation.data, system.grad, system.grad_full, m[12], m[13],
-        m[14])
 
 
 # ---------------------------------------------------------------------------- the choice

@@ -30,6 +30,11 @@ from snapmorph.solver.sparse import SparseLDLT, system_factorisation
 # A pivot smaller than this times the largest diagonal entry means K is numerically singular
 # for LDL^T without pivoting; the dense pivoting fallback then takes over.
 PIVOT_TOL = 1e-13
+# Above this many DOFs a sparse system's fallback is a sparse pivoting LU (SuperLU) instead
+# of the dense one (an eigvalsh of 4000 DOFs takes a minute); its inertia is then the
+# sparse LDL^T count of K + SHIFT_FALLBACK max|diag K| I.
+DENSE_FALLBACK_MAX = 2000
+SHIFT_FALLBACK = 1e-10
 
 
 class BandedSystem:
@@ -97,8 +102,11 @@ class BandedSystem:
         chosen) falls back to the banded one below when its pivots are too small.
         """
         self._sparse_solves = False
-        if self.factorisation == "sparse" and self._factor_sparse():
-            return True
+        if self.factorisation == "sparse":
+            if self._factor_sparse():
+                return True
+            if self.n > DENSE_FALLBACK_MAX:
+                return self._factor_sparse_pivoting()
         self._band_copy[:, :] = self.band
         status, negative, _ = ldlt_factor_envelope(self.band, self.heights, PIVOT_TOL)
         self._dense_lu = None
@@ -136,6 +144,32 @@ class BandedSystem:
         self.factor_ok = True
         return True
 
+    def _factor_sparse_pivoting(self):
+        """The fallback of a large sparse system where LDL^T without pivoting met a tiny
+        pivot: SuperLU with pivoting for the solves, the inertia of K slightly shifted
+        (a count exact away from the critical point the tiny pivot signals)."""
+        import scipy.sparse.linalg  # noqa: PLC0415 - the rare path only
+
+        f = self._sparse
+        self.factor_ok = False
+        if not np.all(np.isfinite(f.data)):
+            return False
+        try:
+            lu = scipy.sparse.linalg.splu(f.matrix().tocsc())
+        except RuntimeError:  # exactly singular
+            return False
+        values = f.data.copy()
+        f.data[f.diagonal] += SHIFT_FALLBACK * float(np.max(np.abs(values[f.diagonal])))
+        status, negative, _ = f.factor(0.0)
+        f.data[:] = values
+        f.factor_ok = False
+        if status != 0:
+            return False
+        self._dense_lu = ("splu", lu)
+        self.negative_eigenvalues = int(negative)
+        self.factor_ok = True
+        return True
+
     def use_band_factor(self):
         """`solve` with the LDL^T factor the caller has made in ``band`` itself."""
         self._dense_lu = None
@@ -148,6 +182,8 @@ class BandedSystem:
         b2 = b.reshape(self.n, -1)
         if self._sparse_solves:
             out = self._sparse.solve(b2)
+        elif isinstance(self._dense_lu, tuple) and self._dense_lu[0] == "splu":
+            out = self._dense_lu[1].solve(np.ascontiguousarray(b2))
         elif self._dense_lu is not None:
             out = scipy.linalg.lu_solve(self._dense_lu, b2, check_finite=False)
         else:
