@@ -1,0 +1,114 @@
+"""The studies of docs/sheets.md: polygon units' bistable ranges and mesh convergence, the
+mesh convergence of a snapped 3 x 3 sheet's final shape, and the memory of sheets (many
+orders of one set of cells).
+
+    .venv/bin/python -m studies.sheets polygons [sides,...]      # h/L scans, F_cr at 21/41/81
+    .venv/bin/python -m studies.sheets convergence [nodes,...]   # 3 x 3, order 4,0,8,2,6
+    .venv/bin/python -m studies.sheets memory [square|hexagon] [orders] [nodes]
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+from snapmorph.units.frame3d import UnitGeometry  # noqa: E402
+
+
+def polygons(sides=(3, 4, 6)):
+    """Bistability over h/L (L the side, 100 mm; t 0.5, w 5 mm) and F_cr's mesh convergence
+    at one bistable h/L."""
+    from snapmorph.units.unit2d import simulate_unit_2d
+
+    scan = {3: (0.05, 0.1, 0.15, 0.2, 0.3, 0.4), 4: (0.1, 0.15, 0.2, 0.3, 0.4),
+            6: (0.1, 0.2, 0.25, 0.3, 0.4, 0.6, 0.8)}
+    for n in sides:
+        for hl in scan[n]:
+            g = UnitGeometry(L=0.1, h=hl * 0.1, t=0.5e-3, w=5e-3)
+            r = simulate_unit_2d(g, sides=n, nodes=21)
+            print(f"sides {n} h/L {hl:.2f}: {r.status:12s} F_cr {r.F_cr:.4f} N bistable "
+                  f"{r.bistable} self-standing {r.self_standing}", flush=True)
+        hl = {3: 0.2, 4: 0.4, 6: 0.4}[n]
+        F = []
+        for nodes in (21, 41, 81):
+            g = UnitGeometry(L=0.1, h=hl * 0.1, t=0.5e-3, w=5e-3)
+            F.append(simulate_unit_2d(g, sides=n, nodes=nodes, check_self_standing=False).F_cr)
+        print(f"sides {n} h/L {hl}: F_cr at 21/41/81 nodes {F[0]:.5f} / {F[1]:.5f} / "
+              f"{F[2]:.5f} N: 41 vs 81 {100 * (F[1] / F[2] - 1):+.2f} %", flush=True)
+
+
+def final_shape(nodes, order, shape=(3, 3), tiling="square"):
+    """(apex heights (n_cells,) m, mean edge curvatures (n_edges,) 1/m, result) of a sheet
+    snapped in ``order`` at ``nodes`` per side."""
+    from snapmorph.units.sheet import build_sheet, simulate_sheet
+    from snapmorph.units.unit2d import edge_metrics
+
+    g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
+    sheet = build_sheet(g, tiling, shape, nodes=nodes)
+    r = simulate_sheet(sheet, order)
+    f = r.final
+    curv = np.array([edge_metrics(f.positions[e])["curvature"] for e in sheet.edge_nodes])
+    return f.apex_heights, curv, r
+
+
+def convergence(meshes=(11, 21, 41), order=(4, 0, 8, 2, 6)):
+    """The final shape of a 3 x 3 square sheet snapped in ``order`` at several meshes:
+    apex heights and edge curvatures against the finest."""
+    rows = []
+    for nodes in meshes:
+        t0 = time.perf_counter()
+        a, k, r = final_shape(nodes, list(order))
+        rows.append((nodes, a, k))
+        print(f"nodes {nodes}: {time.perf_counter() - t0:.0f} s, snapped "
+              f"{np.flatnonzero(r.final.snapped).tolist()}, stable {r.final.stable}, "
+              f"apex heights (mm) {np.round(1e3 * a, 2).tolist()}", flush=True)
+    _, a_ref, k_ref = rows[-1]
+    for nodes, a, k in rows[:-1]:
+        da = float(np.max(np.abs(a - a_ref)) / np.max(np.abs(a_ref)))
+        dk = float(np.max(np.abs(k - k_ref)) / np.max(np.abs(k_ref)))
+        print(f"nodes {nodes} vs {rows[-1][0]}: apex heights {100 * da:.2f} % of the largest, "
+              f"edge curvatures {100 * dk:.2f} % of the largest", flush=True)
+
+
+def memory(tiling="square", n_orders=20, nodes=21):
+    """`explore_orders` on one 5-cell set: 3 x 3 square (cells 0, 2, 4, 6, 8) or 3 x 3
+    hexagonal (cells 0, 2, 4, 6, 8)."""
+    from snapmorph.units.sheet import build_sheet, explore_orders
+
+    g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
+    sheet = build_sheet(g, tiling, (3, 3), nodes=nodes)
+    cells = [0, 2, 4, 6, 8]
+    t0 = time.perf_counter()
+    out = explore_orders(sheet, cells, orders=n_orders)
+    print(f"{tiling} 3x3, cells {cells}, {len(out['orders'])} orders, {nodes} nodes: "
+          f"{time.perf_counter() - t0:.0f} s; {len(out['groups'])} final shapes, "
+          f"{out['distinct']} distinct stable", flush=True)
+    for grp in out["groups"]:
+        orders = [out["orders"][i] for i in grp["orders"]]
+        print(f"  shape: snapped {grp['snapped']} stable {grp['stable']} spread "
+              f"{1e3 * grp['spread']:.2f} mm, {len(orders)} orders, e.g. {orders[:3]}")
+    d = out["distances"]
+    print(f"  largest distance between finals {1e3 * d.max():.2f} mm")
+    return out
+
+
+if __name__ == "__main__":
+    what = sys.argv[1] if len(sys.argv) > 1 else "polygons"
+    if what == "polygons":
+        polygons(tuple(int(s) for s in sys.argv[2].split(",")) if len(sys.argv) > 2
+                 else (3, 4, 6))
+    elif what == "convergence":
+        convergence(tuple(int(s) for s in sys.argv[2].split(",")) if len(sys.argv) > 2
+                    else (11, 21, 41))
+    elif what == "memory":
+        memory(sys.argv[2] if len(sys.argv) > 2 else "square",
+               int(sys.argv[3]) if len(sys.argv) > 3 else 20,
+               int(sys.argv[4]) if len(sys.argv) > 4 else 21)
+    else:
+        raise SystemExit(f"unknown study {what!r}: polygons, convergence or memory")
