@@ -5,6 +5,7 @@ orders of one set of cells).
     .venv/bin/python -m studies.sheets polygons [sides,...]      # h/L scans, F_cr at 21/41/81
     .venv/bin/python -m studies.sheets convergence [nodes,...]   # 3 x 3, order 4,0,8,2,6
     .venv/bin/python -m studies.sheets memory [square|hexagon] [orders] [nodes]
+    .venv/bin/python -m studies.sheets coupling [order] [nodes]  # fast prediction vs sheet
 """
 
 from __future__ import annotations
@@ -98,6 +99,32 @@ def memory(tiling="square", n_orders=20, nodes=21):
     return out
 
 
+def coupling(order=(4, 0, 8), nodes=21):
+    """The fast prediction (every snapped cell's sides bent as the released unit's,
+    `units.sheet.predict_edge_curvatures`) against a 3 x 3 square sheet after each step."""
+    from snapmorph.units.sheet import build_sheet, coupling_error, simulate_sheet
+    from snapmorph.units.unit2d import SIDES, simulate_unit_2d
+
+    g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
+    unit = simulate_unit_2d(g, nodes=nodes)
+    for state in ("released", "iii"):
+        edges = unit.released["edges"] if state == "released" else unit.edges["iii"]
+        k = np.array([edges[s]["curvature"] for s in SIDES])
+        print(f"unit ({state}) side curvatures {np.round(k, 3).tolist()} 1/m", flush=True)
+    k_rel = np.array([unit.released["edges"][s]["curvature"] for s in SIDES])
+    k_iii = np.array([unit.edges["iii"][s]["curvature"] for s in SIDES])
+    sheet = build_sheet(g, "square", (3, 3), nodes=nodes)
+    r = simulate_sheet(sheet, list(order))
+    for step in r.steps:
+        for name, k in (("released unit", k_rel), ("unit (iii)", k_iii)):
+            c = coupling_error(sheet, step, k)
+            print(f"after cell {step.cell} (snapped {np.flatnonzero(step.snapped).tolist()}, "
+                  f"stable {step.stable}, global mode {step.global_mode}) from the {name}: "
+                  f"rms error {c['rms_error']:.3f} 1/m = {100 * c['relative']:.0f} % of the "
+                  f"sheet's rms {np.sqrt(np.mean(c['simulated'] ** 2)):.3f} 1/m, max "
+                  f"{c['max_error']:.3f} 1/m", flush=True)
+
+
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "polygons"
     if what == "polygons":
@@ -110,5 +137,8 @@ if __name__ == "__main__":
         memory(sys.argv[2] if len(sys.argv) > 2 else "square",
                int(sys.argv[3]) if len(sys.argv) > 3 else 20,
                int(sys.argv[4]) if len(sys.argv) > 4 else 21)
+    elif what == "coupling":
+        coupling(tuple(int(c) for c in sys.argv[2].split(",")) if len(sys.argv) > 2
+                 else (4, 0, 8), int(sys.argv[3]) if len(sys.argv) > 3 else 21)
     else:
-        raise SystemExit(f"unknown study {what!r}: polygons, convergence or memory")
+        raise SystemExit(f"unknown study {what!r}: polygons, convergence, memory or coupling")

@@ -38,7 +38,8 @@ from snapmorph.units.sheet_mesh import TILINGS, SheetModel, build_sheet_mesh, ch
 
 __all__ = ["BOUNDARIES", "DEFAULT_NODES_SHEET", "SheetStep", "SheetResult", "build_sheet",
            "simulate_sheet", "apex_heights", "sheet_structure", "explore_orders",
-           "shape_distance", "TILINGS", "check_cells"]
+           "shape_distance", "TILINGS", "check_cells", "edge_curvatures",
+           "predict_edge_curvatures", "coupling_error"]
 
 BOUNDARIES = ("free", "clamped-edge")
 #: default resolution of a sheet's cells: nodes along a side (the unit's is 41)
@@ -290,3 +291,46 @@ def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
     distinct = sum(1 for grp in groups if grp["stable"])
     return {"orders": runs, "results": results, "groups": groups, "distinct": distinct,
             "distances": dist}
+
+
+# ---------------------------------------------------------------------------- prediction
+
+
+def edge_curvatures(sheet: SheetModel, positions) -> np.ndarray:
+    """(n_edges,) mean curvature (1/m) of every edge strip of the sheet in a state
+    (`units.unit2d.edge_metrics`: theta / arc length, > 0 when the ends rise)."""
+    from snapmorph.units.unit2d import edge_metrics
+
+    P = np.asarray(positions)
+    return np.array([edge_metrics(P[n])["curvature"] for n in sheet.edge_nodes])
+
+
+def predict_edge_curvatures(sheet: SheetModel, snapped, unit_curvatures) -> np.ndarray:
+    """The fast prediction of a sheet's edge curvatures from unit data: every snapped cell
+    bends each of its sides as the unit alone bends that side (``unit_curvatures``: (sides,)
+    1/m, side k of a cell from vertex k to k + 1 counter-clockwise, e.g. the released
+    unit's per-side curvatures of `simulate_unit_2d` in its side order), cells as made add
+    nothing, and an edge two cells share takes the sum of both. No coupling between cells:
+    the difference from the whole-sheet simulation is the coupling error."""
+    snapped = np.asarray(snapped, dtype=bool)
+    k = np.asarray(unit_curvatures, dtype=float)
+    out = np.zeros(len(sheet.edge_nodes))
+    for c, edges in enumerate(sheet.edges):
+        if snapped[c]:
+            for side, e in enumerate(edges):
+                out[e] += k[side]
+    return out
+
+
+def coupling_error(sheet: SheetModel, step, unit_curvatures) -> dict:
+    """The prediction of `predict_edge_curvatures` for a step's snapped cells against its
+    released sheet: {"predicted", "simulated" (n_edges,) 1/m, "rms_error" 1/m, "relative"
+    (rms error / rms simulated), "max_error" 1/m}."""
+    sim = edge_curvatures(sheet, step.positions)
+    pred = predict_edge_curvatures(sheet, step.snapped, unit_curvatures)
+    err = pred - sim
+    rms = float(np.sqrt(np.mean(err ** 2)))
+    scale = float(np.sqrt(np.mean(sim ** 2)))
+    return {"predicted": pred, "simulated": sim, "rms_error": rms,
+            "relative": rms / scale if scale > 0 else NAN,
+            "max_error": float(np.max(np.abs(err)))}

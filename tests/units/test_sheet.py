@@ -141,3 +141,19 @@ def test_3x3_sheet_snaps_the_pushed_cells(snapped_3x3):
     assert first.d.shape == first.F.shape and first.positions.shape == (sheet.mesh.n_nodes, 3)
     heights = apex_heights(sheet, result.final.positions)
     assert np.array_equal(heights < 0, result.final.snapped)
+
+
+def test_fast_prediction_sums_the_unit_curvatures_of_the_snapped_cells():
+    from snapmorph.units.sheet import predict_edge_curvatures
+
+    sheet = build_sheet(G, "square", (1, 2), nodes=11)  # cells 0 | 1, sharing one edge
+    k = np.array([1.0, 2.0, 3.0, 4.0])  # south, east, north, west of a unit
+    shared = set(sheet.edges[0]) & set(sheet.edges[1])
+    assert len(shared) == 1
+    (e,) = shared
+    p = predict_edge_curvatures(sheet, [True, False], k)
+    assert p[e] == 2.0  # cell 0's east side
+    assert p[sheet.edges[1][0]] == 0.0  # cell 1's south: not snapped
+    p = predict_edge_curvatures(sheet, [True, True], k)
+    assert p[e] == 2.0 + 4.0  # cell 0's east plus cell 1's west
+    assert np.count_nonzero(p) == len(p)
