@@ -42,6 +42,7 @@ def test_h_beyond_the_arch_span_is_refused_with_the_span():
         build_unit_mesh_2d(_geometry(0.6), sides=3)
 
 
+@pytest.mark.slow
 def test_the_general_polygon_mesh_reproduces_the_square_unit_within_round_off():
     """The polygon builder (`add_cell_arches`) on a square, with continuous arches and with
     four half-arches bonded at the apex, pushes through as the square unit's own mesh."""
@@ -72,6 +73,7 @@ def test_sides_4_is_the_square_unit_bit_for_bit():
     assert a.F_cr == b.F_cr and a.curvature == b.curvature
 
 
+@pytest.mark.slow
 def test_hexagon_is_bistable_above_h_over_L_0_3_and_monostable_at_0_2():
     mono = simulate_unit_2d(_geometry(0.2), sides=6, nodes=21, check_self_standing=False)
     assert mono.status == "monostable" and not mono.bistable
@@ -83,6 +85,7 @@ def test_hexagon_is_bistable_above_h_over_L_0_3_and_monostable_at_0_2():
     assert bi.curvature_released > 0
 
 
+@pytest.mark.slow
 def test_hexagon_F_cr_converges_with_the_mesh_within_1_percent():
     F = [simulate_unit_2d(_geometry(0.4), sides=6, nodes=n, check_self_standing=False).F_cr
          for n in (21, 41)]

@@ -84,6 +84,7 @@ def test_shape_distance_ignores_rigid_motion():
     assert 0.05 < shape_distance(X, Y) <= 0.1
 
 
+@pytest.mark.slow
 def test_one_by_one_square_sheet_is_the_2d_unit():
     """F_cr and every side's curvature in state (iii) within 1 % of `simulate_unit_2d`
     (same mesh resolution; the sheet's rods are numbered and oriented differently)."""
@@ -107,6 +108,7 @@ def snapped_3x3():
     return sheet, simulate_sheet(sheet, [4, 0, 8])
 
 
+@pytest.mark.slow
 def test_3x3_sheet_every_step_is_an_equilibrium_with_its_stability_checked(snapped_3x3):
     sheet, result = snapped_3x3
     st = sheet_structure(sheet)
@@ -133,6 +135,7 @@ def test_3x3_sheet_every_step_is_an_equilibrium_with_its_stability_checked(snapp
     assert result.final.stable
 
 
+@pytest.mark.slow
 def test_3x3_sheet_snaps_the_pushed_cells(snapped_3x3):
     sheet, result = snapped_3x3
     first = result.steps[0]
@@ -157,3 +160,20 @@ def test_fast_prediction_sums_the_unit_curvatures_of_the_snapped_cells():
     p = predict_edge_curvatures(sheet, [True, True], k)
     assert p[e] == 2.0 + 4.0  # cell 0's east plus cell 1's west
     assert np.count_nonzero(p) == len(p)
+
+
+@pytest.mark.slow
+def test_explore_orders_runs_every_order_and_groups_the_finals():
+    sheet = build_sheet(G, "square", (1, 2), nodes=21)
+    out = explore_orders(sheet, [0, 1], orders=2)
+    assert out["orders"] == [[0, 1], [1, 0]]
+    assert len(out["results"]) == 2 and out["distances"].shape == (2, 2)
+    d = out["distances"][0, 1]
+    grouped = sum(len(g["orders"]) for g in out["groups"])
+    assert grouped == 2
+    assert len(out["groups"]) == (1 if d <= 0.01 * G.L else 2)
+    for g in out["groups"]:
+        final = out["results"][g["orders"][0]].final
+        assert g["snapped"] == np.flatnonzero(final.snapped).tolist()
+        assert g["stable"] == final.stable
+    assert out["distinct"] == sum(g["stable"] for g in out["groups"])

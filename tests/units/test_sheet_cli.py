@@ -32,6 +32,7 @@ def test_triangle_too_tall_for_its_arches_is_refused_in_one_line(capsys):
     assert "h (arch apex height, m) must be <=" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_one_cell_sheet_runs_and_writes_its_states(tmp_path, capsys):
     import xarray as xr
 
