@@ -10,15 +10,22 @@ import numpy as np
 
 def plot_states(result, path):
     """One 3-D panel per state of ``result`` (mm), written to ``path``."""
+    sheet = result.sheet
+    states = [("as made", sheet.mesh.positions, np.zeros(sheet.n_cells, bool))]
+    states += [(f"step {k + 1}: cell {s.cell} pushed" + ("" if s.stable else " (unstable)"),
+                s.positions, s.snapped) for k, s in enumerate(result.steps)]
+    return plot_shapes(sheet, states, path)
+
+
+def plot_shapes(sheet, states, path):
+    """One 3-D panel (mm) per (title, positions (n, 3) m, snapped (n_cells,)) of ``states``:
+    e.g. two shapes reached with the same snapped cells in different orders."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    sheet = result.sheet
-    states = [("as made", sheet.mesh.positions, np.zeros(sheet.n_cells, bool))]
-    states += [(f"step {k + 1}: cell {s.cell} pushed" + ("" if s.stable else " (unstable)"),
-                s.positions, s.snapped) for k, s in enumerate(result.steps)]
+    states = [(t, P, np.asarray(s, dtype=bool)) for t, P, s in states]
     cols = min(3, len(states))
     rows = math.ceil(len(states) / cols)
     fig = plt.figure(figsize=(4.2 * cols, 3.6 * rows))

@@ -4,7 +4,7 @@ orders of one set of cells).
 
     .venv/bin/python -m studies.sheets polygons [sides,...]      # h/L scans, F_cr at 21/41/81
     .venv/bin/python -m studies.sheets convergence [nodes,...]   # 3 x 3, order 4,0,8,2,6
-    .venv/bin/python -m studies.sheets memory [square|hexagon] [orders] [nodes]
+    .venv/bin/python -m studies.sheets memory [square|hexagon] [orders] [nodes] [cells]
     .venv/bin/python -m studies.sheets coupling [order] [nodes]  # fast prediction vs sheet
 """
 
@@ -77,14 +77,14 @@ def convergence(meshes=(11, 21, 41), order=(4, 0, 8, 2, 6)):
               f"edge curvatures {100 * dk:.2f} % of the largest", flush=True)
 
 
-def memory(tiling="square", n_orders=20, nodes=21):
-    """`explore_orders` on one 5-cell set: 3 x 3 square (cells 0, 2, 4, 6, 8) or 3 x 3
-    hexagonal (cells 0, 2, 4, 6, 8)."""
+def memory(tiling="square", n_orders=20, nodes=21, cells=(0, 2, 4, 6, 8)):
+    """`explore_orders` on one set of cells of a 3 x 3 sheet (default the 5-cell set 0, 2,
+    4, 6, 8; square or hexagonal)."""
     from snapmorph.units.sheet import build_sheet, explore_orders
 
     g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
     sheet = build_sheet(g, tiling, (3, 3), nodes=nodes)
-    cells = [0, 2, 4, 6, 8]
+    cells = list(cells)
     t0 = time.perf_counter()
     out = explore_orders(sheet, cells, orders=n_orders)
     print(f"{tiling} 3x3, cells {cells}, {len(out['orders'])} orders, {nodes} nodes: "
@@ -96,6 +96,19 @@ def memory(tiling="square", n_orders=20, nodes=21):
               f"{1e3 * grp['spread']:.2f} mm, {len(orders)} orders, e.g. {orders[:3]}")
     d = out["distances"]
     print(f"  largest distance between finals {1e3 * d.max():.2f} mm")
+    same = {}
+    for grp in out["groups"]:
+        same.setdefault(tuple(grp["snapped"]), []).append(grp)
+    pairs = [g for g in same.values() if len(g) > 1 and all(x["stable"] for x in g)]
+    if pairs:  # two stable shapes with the same snapped cells: the memory figure
+        from snapmorph.figures_sheet import plot_shapes
+
+        a, b = pairs[0][:2]
+        path = f"sheet_memory_{tiling}.png"
+        plot_shapes(sheet, [(f"order {out['orders'][g['orders'][0]]}", g["positions"],
+                             np.isin(np.arange(sheet.n_cells), g["snapped"]))
+                            for g in (a, b)], path)
+        print(f"  wrote {path}: two shapes with cells {a['snapped']} snapped")
     return out
 
 
@@ -136,7 +149,9 @@ if __name__ == "__main__":
     elif what == "memory":
         memory(sys.argv[2] if len(sys.argv) > 2 else "square",
                int(sys.argv[3]) if len(sys.argv) > 3 else 20,
-               int(sys.argv[4]) if len(sys.argv) > 4 else 21)
+               int(sys.argv[4]) if len(sys.argv) > 4 else 21,
+               tuple(int(c) for c in sys.argv[5].split(",")) if len(sys.argv) > 5
+               else (0, 2, 4, 6, 8))
     elif what == "coupling":
         coupling(tuple(int(c) for c in sys.argv[2].split(",")) if len(sys.argv) > 2
                  else (4, 0, 8), int(sys.argv[3]) if len(sys.argv) > 3 else 21)
