@@ -3,7 +3,7 @@ mesh convergence of a snapped 3 x 3 sheet's final shape, and the memory of sheet
 orders of one set of cells).
 
     .venv/bin/python -m studies.sheets polygons [sides,...]      # h/L scans, F_cr at 21/41/81
-    .venv/bin/python -m studies.sheets convergence [nodes,...]   # 3 x 3, order 4,0,8,2,6
+    .venv/bin/python -m studies.sheets convergence [nodes,...]   # 3 x 3, order 4,0,8
     .venv/bin/python -m studies.sheets memory [square|hexagon] [orders] [nodes] [cells]
     .venv/bin/python -m studies.sheets coupling [order] [nodes]  # fast prediction vs sheet
 """
@@ -58,7 +58,7 @@ def final_shape(nodes, order, shape=(3, 3), tiling="square"):
     return f.apex_heights, curv, r
 
 
-def convergence(meshes=(11, 21, 41), order=(4, 0, 8, 2, 6)):
+def convergence(meshes=(21, 31, 41), order=(4, 0, 8)):
     """The final shape of a 3 x 3 square sheet snapped in ``order`` at several meshes:
     apex heights and edge curvatures against the finest."""
     rows = []
@@ -145,7 +145,7 @@ if __name__ == "__main__":
                  else (3, 4, 6))
     elif what == "convergence":
         convergence(tuple(int(s) for s in sys.argv[2].split(",")) if len(sys.argv) > 2
-                    else (11, 21, 41))
+                    else (21, 31, 41))
     elif what == "memory":
         memory(sys.argv[2] if len(sys.argv) > 2 else "square",
                int(sys.argv[3]) if len(sys.argv) > 3 else 20,
