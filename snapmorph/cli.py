@@ -12,7 +12,8 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("unit", "maps", "design", "fk", "array", "figures", "unit3d", "unit2d", "tolerance")
+COMMANDS = ("unit", "maps", "design", "fk", "array", "figures", "unit3d", "unit2d", "tolerance",
+            "sheet")
 
 
 class CommandError(Exception):

@@ -1,8 +1,10 @@
 """Constrained, assembled problems: what the path followers work on (`solver.problem.System`).
 
 `BandedSystem` holds what every rod model shares: a DOF map (full -> reduced, -1 held), the
-reduced gradient and tangent stiffness in band storage, the banded LDL^T factorisation with
-its inertia count (and a dense pivoting fallback), solves and increments. `ReducedSystem`
+reduced gradient and tangent stiffness in band storage, the factorisation of K with its
+inertia count — the banded LDL^T (and a dense pivoting fallback), or for structures whose
+envelope makes it slow (sheets) the sparse LDL^T of `solver.sparse`, chosen once per system
+by `solver.sparse.system_factorisation` (``factorisation``) — solves and increments. `ReducedSystem`
 (planar rods) and `RodSystem3D` (3-D rods with twist, carrying reference frames from state
 to state) add the assembly and the fused compiled iterations of their model (`solver.iteration`).
 They own no physics of their own. A system may carry dead loads (``loads``: full DOFs,
@@ -23,10 +25,16 @@ from snapmorph.solver.banded import (band_to_dense, envelope_heights, ldlt_facto
 from snapmorph.solver.frames3d import canonical_twist_offset, reference_twist, transport_frames
 from snapmorph.solver.iteration import (mgdc_iteration, mgdc_iteration3d, newton_iteration,
                                         newton_iteration3d)
+from snapmorph.solver.sparse import SparseLDLT, system_factorisation
 
 # A pivot smaller than this times the largest diagonal entry means K is numerically singular
 # for LDL^T without pivoting; the dense pivoting fallback then takes over.
 PIVOT_TOL = 1e-13
+# Above this many DOFs a sparse system's fallback is a sparse pivoting LU (SuperLU) instead
+# of the dense one (an eigvalsh of 4000 DOFs takes a minute); its inertia is then the
+# sparse LDL^T count of K + SHIFT_FALLBACK max|diag K| I.
+DENSE_FALLBACK_MAX = 2000
+SHIFT_FALLBACK = 1e-10
 
 
 class BandedSystem:
@@ -60,6 +68,12 @@ class BandedSystem:
         # the factor's envelope (fill included): assembly clears, the factor and the solves
         # walk only that part of the band (the rest stays zero; no scans per solve)
         self.heights = envelope_heights(self.band.shape[1], *element_dofs)
+        # the one choice of factorisation ("banded" or "sparse"); the sparse pattern and its
+        # analysis are built at the first sparse factor()
+        self.factorisation = system_factorisation(self.n, self.heights, *element_dofs)
+        self._element_dofs = element_dofs
+        self._sparse = None
+        self._sparse_solves = False  # solve() uses the sparse factor
         self.grad = np.zeros(max(self.n, 1))
         self.grad_full = np.zeros(self.dof_map.shape[0])
         self._work = np.zeros((max(self.n, 1), 3))
@@ -84,8 +98,15 @@ class BandedSystem:
     def factor(self):
         """Factorise the assembled K; records the number of negative eigenvalues.
 
-        Returns False when K is singular even for a pivoting solver.
+        Returns False when K is singular even for a pivoting solver. The sparse path (when
+        chosen) falls back to the banded one below when its pivots are too small.
         """
+        self._sparse_solves = False
+        if self.factorisation == "sparse":
+            if self._factor_sparse():
+                return True
+            if self.n > DENSE_FALLBACK_MAX:
+                return self._factor_sparse_pivoting()
         self._band_copy[:, :] = self.band
         status, negative, _ = ldlt_factor_envelope(self.band, self.heights, PIVOT_TOL)
         self._dense_lu = None
@@ -108,16 +129,62 @@ class BandedSystem:
         self.factor_ok = True
         return True
 
+    def _factor_sparse(self):
+        """The sparse LDL^T of the assembled K (band values copied onto its pattern); True
+        when it succeeded (inertia recorded, `solve` uses it)."""
+        if self._sparse is None:
+            self._sparse = SparseLDLT(self.n, *self._element_dofs)
+        self._sparse.from_band(self.band)
+        status, negative, _ = self._sparse.factor(PIVOT_TOL)
+        if status != 0:
+            return False
+        self._dense_lu = None
+        self._sparse_solves = True
+        self.negative_eigenvalues = int(negative)
+        self.factor_ok = True
+        return True
+
+    def _factor_sparse_pivoting(self):
+        """The fallback of a large sparse system where LDL^T without pivoting met a tiny
+        pivot: SuperLU with pivoting for the solves, the inertia of K slightly shifted
+        (a count exact away from the critical point the tiny pivot signals)."""
+        import scipy.sparse.linalg  # noqa: PLC0415 - the rare path only
+
+        f = self._sparse
+        self.factor_ok = False
+        if not np.all(np.isfinite(f.data)):
+            return False
+        try:
+            lu = scipy.sparse.linalg.splu(f.matrix().tocsc())
+        except RuntimeError:  # exactly singular
+            return False
+        values = f.data.copy()
+        f.data[f.diagonal] += SHIFT_FALLBACK * float(np.max(np.abs(values[f.diagonal])))
+        status, negative, _ = f.factor(0.0)
+        f.data[:] = values
+        f.factor_ok = False
+        if status != 0:
+            return False
+        self._dense_lu = ("splu", lu)
+        self.negative_eigenvalues = int(negative)
+        self.factor_ok = True
+        return True
+
     def use_band_factor(self):
         """`solve` with the LDL^T factor the caller has made in ``band`` itself."""
         self._dense_lu = None
+        self._sparse_solves = False
 
     def solve(self, rhs):
         """Solve K X = rhs for rhs (n,) or (n, m); returns a new array."""
         b = np.array(rhs, dtype=float, copy=True)
         one = b.ndim == 1
         b2 = b.reshape(self.n, -1)
-        if self._dense_lu is not None:
+        if self._sparse_solves:
+            out = self._sparse.solve(b2)
+        elif isinstance(self._dense_lu, tuple) and self._dense_lu[0] == "splu":
+            out = self._dense_lu[1].solve(np.ascontiguousarray(b2))
+        elif self._dense_lu is not None:
             out = scipy.linalg.lu_solve(self._dense_lu, b2, check_finite=False)
         else:
             out = ldlt_solve_envelope(self.band, self.heights, np.ascontiguousarray(b2))
@@ -127,7 +194,10 @@ class BandedSystem:
         """One fused Newton iteration at load lam P (see `solver.iteration`); updates q.
 
         Returns (status, residual_max, du_max): status 0 converged (K at q factorised),
-        1 LDL^T failed (nothing done: use evaluate/factor/solve), 2 q updated."""
+        1 LDL^T failed or the system factorises sparse (nothing done: use
+        evaluate/factor/solve), 2 q updated."""
+        if self.factorisation == "sparse":
+            return 1, np.nan, np.nan
         status, neg, r_max, du_max, energy = self._newton_iteration(
             q, lam, P, *self._kernel_args, tol_force)
         self._after_fused(status, neg, energy)
@@ -136,6 +206,8 @@ class BandedSystem:
     def fused_mgdc(self, q, lam, P, uP1, tol_force):
         """One fused MGDC corrector iteration; updates q. Returns (status, residual_max,
         du_max, dlam) with the statuses of `fused_newton`."""
+        if self.factorisation == "sparse":
+            return 1, np.nan, np.nan, 0.0
         status, neg, r_max, du_max, dl, energy = self._mgdc_iteration(
             q, lam, P, uP1, *self._kernel_args, tol_force)
         self._after_fused(status, neg, energy)
@@ -149,6 +221,7 @@ class BandedSystem:
     def _after_fused(self, status, neg, energy):
         self.energy = energy
         self._dense_lu = None
+        self._sparse_solves = False
         self.factor_ok = status != 1
         if status != 1:
             self.negative_eigenvalues = int(neg)

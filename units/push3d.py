@@ -91,14 +91,17 @@ class RodUnitPush:
 
     failures = (Exception,)
 
-    def __init__(self, st, node, distance, steps=60, critical=False, method="mgdc"):
-        self.st, self.node, self.distance = st, node, distance
+    def __init__(self, st, node, distance, steps=60, critical=False, method="mgdc",
+                 start=None):
+        self.st, self.node, self.distance, self.start = st, node, distance, start
         self.steps, self.critical, self.method = steps, critical, method
         self.probe = self.X = self.system = None
 
     def push(self, stop):
         mgdc = self.method == "mgdc"
         options = {"target_iterations": MGDC_TARGET_ITERATIONS} if mgdc else {}
+        if self.start is not None:
+            options["start"] = self.start
         rule = stop
 
         def stop(rows):  # MGDC's force-control counts classify the crossings
@@ -143,12 +146,15 @@ class RodUnitPush:
         pass
 
 
-def push_through(st, node, distance, steps=60, critical=False, method="mgdc") -> PushOutcome:
+def push_through(st, node, distance, steps=60, critical=False, method="mgdc",
+                 start=None) -> PushOutcome:
     """Push ``node`` of ``st`` down (-z) by up to ``distance`` (m) until the force has
     crossed zero twice; F_cr, the d's and the states (i)-(iii), and whether (iii) is stable
     with the actuator unloaded (`units.push_through`; else bistable is False and status
-    "second state unstable: ...")."""
-    return experiment.push_through(RodUnitPush(st, node, distance, steps, critical, method), RULES)
+    "second state unstable: ..."). ``start``: the equilibrium the push starts from (a full
+    state; None: stress free), d measured from it."""
+    return experiment.push_through(
+        RodUnitPush(st, node, distance, steps, critical, method, start=start), RULES)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -53,36 +53,26 @@ import numpy as np
 
 from snapmorph.units.frame3d import JOINT_LENGTH_DEFAULT, PETG_NU, Mesh3D, UnitGeometry
 from snapmorph.units.planar import check_flag, check_steps
+from snapmorph.units.polygon import (OVERLAPS, RIGID_OVERLAP_THICKNESS, Unit2DModel,
+                                     build_polygon_mesh, check_sides)
+from snapmorph.units.polygon import arch_raised as _arch_raised
+from snapmorph.units.polygon import side_abscissae as _side_abscissae
 from snapmorph.units.push3d import level, push_through, record_release, relax_released, transfer_state
 from snapmorph.units.result import UnitResultBase
-from snapmorph.units.shapes import arch_height, cumulative_length, end_tangent_angle, segment_points
+from snapmorph.units.shapes import arch_height, end_tangent_angle, segment_points
 
 __all__ = ["Unit2DModel", "Unit2DResult", "build_unit_mesh_2d", "build_unit_2d",
            "simulate_unit_2d", "edge_metrics", "DEFAULT_NODES_2D", "SIDES"]
 
 #: default resolution: nodes along one side of the square
 DEFAULT_NODES_2D = 41
-#: how the w x w overlaps of strips meeting at right angles are modelled (module docstring)
-OVERLAPS = ("elastic", "rigid")
-#: thickness of the overlap edges / t with overlaps="rigid": 1000x the bending stiffness
-#: (5x instead moved the released theta by 0.16 deg and F_cr by 0.1 % at 81 nodes), not so
-#: stiff that the solver's force scale (set by the stiffest edge) loosens its tolerances more
-RIGID_OVERLAP_THICKNESS = 10.0
+#: how the w x w overlaps of strips meeting at right angles are modelled (module docstring):
+#: OVERLAPS; RIGID_OVERLAP_THICKNESS, the thickness of the overlap edges / t with
+#: overlaps="rigid", is 1000x the bending stiffness (5x instead moved the released theta by
+#: 0.16 deg and F_cr by 0.1 % at 81 nodes), not so stiff that the solver's force scale (set
+#: by the stiffest edge) loosens its tolerances more (both in `units.polygon`)
 SIDES = ("south", "east", "north", "west")
 NAN = float("nan")
-
-
-@dataclass
-class Unit2DModel:
-    """A meshed 2-D unit: the mesh, the structure (None until built) and named nodes."""
-
-    mesh: Mesh3D
-    structure: object
-    push_node: int
-    sides: dict  # side name -> node indices, corner to corner
-    arches: dict  # "x", "y" -> node indices
-    supports: np.ndarray
-    overlaps: str = "elastic"
 
 
 def _flat_2d(g):
@@ -105,62 +95,18 @@ def check_geometry_2d(g: UnitGeometry):
                          "between the actuator's edges); got 0")
 
 
-def _side_abscissae(L, w, spacing):
-    """Abscissae (m) of a side's nodes from corner to corner and the index of its midpoint:
-    one edge over each overlap ([0, w/2] at the corners, [L/2 - w/2, L/2 + w/2] under the
-    arch foot), edges no longer than ``spacing`` in between."""
-    inner = segment_points(np.array([0.5 * w, 0.5 * (L - w)]), spacing)
-    half = np.concatenate([[0.0], inner, [0.5 * L]])
-    return np.concatenate([half, L - half[::-1][1:]]), len(half) - 1
-
-
-def _arch_raised(x0, span, h, spacing, joint_length, w, overlaps):
-    """Abscissae of the arch nodes on its raised part [x0, x0 + span], near-uniform in arc
-    length (edges no longer than ``spacing``) except at the apex, where the nodes do not
-    depend on the mesh: "elastic", the actuator's rigid joint of arc length ``joint_length``
-    centred on the apex with one edge straddling each end of it (as `arch_nodes_x` with the
-    straddle at its coarse-mesh length joint_length / 2); "rigid", the crossing's w/2 each
-    side of the apex (and the ends of a longer joint). Returns (x, index of the apex node,
-    (start, stop) slice of the nodes the actuator moves as one, [first, stop) of the edges
-    of the crossing made rigid (empty for "elastic"))."""
-    xs = np.linspace(x0, x0 + span, 8001)
-    s = cumulative_length(xs, arch_height(xs, x0, span, h))
-    total = s[-1]
-    s_act = float(np.interp(x0 + 0.5 * span, xs, s))
-    half = 0.5 * joint_length
-    if overlaps == "elastic":
-        room = min(s_act - half, total - s_act - half)
-        straddle = min(half, room)
-        core = [-half - 0.5 * straddle, -half + 0.5 * straddle, 0.0, half - 0.5 * straddle,
-                half + 0.5 * straddle]
-        c = 0.0
-    else:
-        c = 0.5 * w
-        reach = max(c, half)
-        room = min(s_act, total - s_act) - reach
-        core = sorted({-reach, -c, 0.0, c, reach})
-    if not room > 0:
-        raise ValueError(f"the actuator joint (joint_length {joint_length:.6g} m) or the "
-                         f"crossing (w {w:.6g} m) does not fit on the arch")
-    left = segment_points(np.array([0.0, s_act + core[0]]), spacing)
-    right = segment_points(np.array([s_act + core[-1], total]), spacing)
-    targets = np.concatenate([left, s_act + np.array(core[1:-1]), right])
-    x = np.interp(targets, s, xs)
-    x[0], x[-1] = x0, x0 + span
-    lo = len(left) - 1
-    apex = lo + core.index(0.0)
-    stiff = (lo + core.index(-c), lo + core.index(c)) if c > 0 else (apex, apex)
-    return x, apex, (lo, lo + len(core)), stiff
-
-
 def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float = PETG_NU,
                        actuator: bool = True, supports: bool = True,
-                       overlaps: str = "elastic") -> Unit2DModel:
+                       overlaps: str = "elastic", sides: int = 4) -> Unit2DModel:
     """Mesh the 2-D unit (no solver needed). ``nodes``: resolution, the spacing is
     L / (nodes - 1) (a side has that many nodes when w/2 is a multiple of the spacing, as at
     41 with w = L / 20; each side always has a node at its midpoint). ``overlaps``: "elastic"
-    or "rigid" (module docstring)."""
-    check_geometry_2d(g)
+    or "rigid" (module docstring). ``sides``: the footprint, 3 (triangle), 4 (the square
+    unit, built here as it always was) or 6 (hexagon) sides of length L
+    (`units.polygon.build_polygon_mesh`)."""
+    sides = check_sides(sides)
+    if sides == 4:
+        check_geometry_2d(g)
     if overlaps not in OVERLAPS:
         raise ValueError(f"overlaps (model of the w x w overlaps) must be one of {OVERLAPS}; "
                          f"got {overlaps!r}")
@@ -176,6 +122,8 @@ def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float
         raise ValueError(f"nu (Poisson's ratio) must be a number; got {nu!r}") from None
     if not -1.0 < nu <= 0.5:
         raise ValueError(f"nu (Poisson's ratio) must be in (-1, 0.5]; got {nu!r}")
+    if sides != 4:
+        return build_polygon_mesh(g, sides, int(nodes), nu, actuator, supports, overlaps)
     L, w, t = g.L, g.w, g.t
     spacing = L / (int(nodes) - 1)
     s, mid = _side_abscissae(L, w, spacing)  # symmetric, midpoint a node
@@ -245,7 +193,8 @@ def build_unit_mesh_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, nu: float
 
 
 def build_unit_2d(g: UnitGeometry, nodes: int = DEFAULT_NODES_2D, **options) -> Unit2DModel:
-    """Mesh the 2-D unit and build its `solver.Structure3D`."""
+    """Mesh the 2-D unit (``options`` of `build_unit_mesh_2d`, ``sides`` among them) and
+    build its `solver.Structure3D`."""
     model = build_unit_mesh_2d(g, nodes=nodes, **options)
     model.structure = model.mesh.to_structure()
     return model
@@ -331,14 +280,17 @@ class Unit2DResult(UnitResultBase):
 
 
 def _side_mean(edges, key) -> float:
-    """Mean over the four sides of ``edges[side][key]`` (NaN without edges)."""
-    return float(np.mean([edges[s][key] for s in SIDES])) if edges else NAN
+    """Mean over the sides of ``edges[side][key]`` (NaN without edges)."""
+    return float(np.mean([m[key] for m in edges.values()])) if edges else NAN
 
 
 def _state_shapes(model: Unit2DModel, pos) -> dict:
     pos = np.asarray(pos)
     out = {side: pos[n] for side, n in model.sides.items()}
-    out.update(arch_x=pos[model.arches["x"]], arch_y=pos[model.arches["y"]])
+    # the square unit's arches are "x" and "y" (shapes "arch_x", "arch_y"); a polygon
+    # unit's are named "arch_<side>[_<side>]" already
+    out.update({k if k.startswith("arch_") else f"arch_{k}": pos[v]
+                for k, v in model.arches.items()})
     out["rods"] = {rod.name: pos[rod.nodes] for rod in model.mesh.rods}
     return out
 
@@ -351,7 +303,10 @@ def released_supports_2d(model: Unit2DModel):
     """A statically determinate set of supports that holds only the rigid-body motion of the
     2-D unit: (node, components) at the side midpoints (where the supports were): south x,
     y, z; north x, z (no turning about z or x); east z (no turning about y). Under no load
-    their reactions vanish, so they place the released unit without straining it."""
+    their reactions vanish, so they place the released unit without straining it. A polygon
+    unit's own set when it has one (``model.holds``, `units.polygon.released_holds`)."""
+    if model.holds is not None:
+        return list(model.holds)
     south, east, north, _ = (int(n) for n in model.supports)
     return [(south, "xyz"), (north, "xz"), (east, "z")]
 
@@ -373,7 +328,7 @@ def released_state_2d(g, model: Unit2DModel, q_iii, nodes, nu):
     released dict or None, negative eigenvalues or None, why not self-standing ("" when it
     is))."""
     free = build_unit_mesh_2d(g, nodes=nodes, nu=nu, actuator=False, supports=False,
-                              overlaps=model.overlaps)
+                              overlaps=model.overlaps, sides=model.n_sides)
     st = free.mesh.to_structure()  # same rods, same node numbers (the actuator adds no rod)
     for node, comps in released_supports_2d(free):
         st.fix(node, comps)
@@ -399,18 +354,20 @@ def released_state_2d(g, model: Unit2DModel, q_iii, nodes, nu):
 def simulate_unit_2d(g: UnitGeometry, nodes: int | None = None, nu: float = PETG_NU,
                      steps: int = 60, critical: bool = False,
                      check_self_standing: bool = True,
-                     overlaps: str = "elastic") -> Unit2DResult:
+                     overlaps: str = "elastic", sides: int = 4) -> Unit2DResult:
     """Push the 2-D unit's apex down until it snaps; F_cr, the d's and each side's S, theta
     and curvature in the second stable state, and (``check_self_standing``) in the released
     state (iii) (actuator and supports removed; see `Unit2DResult`). ``overlaps``: "elastic"
-    (default) or "rigid" w x w overlaps (module docstring). Arguments are validated
-    (ValueError naming the parameter); failures of the solve come back in ``status``."""
+    (default) or "rigid" w x w overlaps (module docstring); ``sides``: the footprint, 3, 4
+    (default: the square unit) or 6 (`units.polygon`; per-side metrics under its side
+    names). Arguments are validated (ValueError naming the parameter); failures of the
+    solve come back in ``status``."""
     nodes = DEFAULT_NODES_2D if nodes is None else nodes
     check_steps(steps)
     critical = check_flag("critical", critical)
     check_self_standing = check_flag("check_self_standing", check_self_standing)
     t0 = time.perf_counter()
-    model = build_unit_2d(g, nodes=nodes, nu=nu, overlaps=overlaps)
+    model = build_unit_2d(g, nodes=nodes, nu=nu, overlaps=overlaps, sides=sides)
     out = push_through(model.structure, model.push_node, 3.0 * g.h, steps=int(steps),
                        critical=critical)
     r = Unit2DResult(g, out.status, bistable=out.bistable, F_cr=out.F_cr, d_cr=out.d_cr,

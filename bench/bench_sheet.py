@@ -1,0 +1,68 @@
+"""Sheets of 2-D units (`units.sheet`): a 3 x 3 square sheet snapping all nine cells (target
+<= 60 s on one core) and a 6 x 6 sheet snapping cells from its centre outwards (it must
+complete), at the sheets' default resolution (21 nodes per cell side), L = 100, h = 40,
+t = 0.5, w = 5 mm. One thread; wall-clock seconds of the whole simulation and per step.
+
+    .venv/bin/python bench/bench_sheet.py            # 3 x 3, nine cells; 6 x 6, four cells
+    BENCH_SHEET_6X6_CELLS=36 .venv/bin/python bench/bench_sheet.py   # every 6 x 6 cell
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import sys  # noqa: E402
+import time  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))
+
+#: the target of issue 25: a 3 x 3 sheet snapping all nine cells, one core
+TARGET_3X3_S = 60.0
+
+
+def centre_out(rows, cols):
+    """The cells of a rows x cols square sheet ordered by distance from its centre."""
+    c = ((rows - 1) / 2, (cols - 1) / 2)
+    cells = range(rows * cols)
+    return sorted(cells, key=lambda k: ((k // cols - c[0]) ** 2 + (k % cols - c[1]) ** 2, k))
+
+
+def run(shape, order):
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.sheet import build_sheet, sheet_structure, simulate_sheet
+
+    g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
+    t0 = time.perf_counter()
+    sheet = build_sheet(g, "square", shape)
+    system = sheet_structure(sheet).reduced_system()
+    r = simulate_sheet(sheet, order)
+    total = time.perf_counter() - t0
+    print(f"sheet {shape[0]}x{shape[1]}: {sheet.mesh.n_nodes} nodes, {system.n} DOFs "
+          f"({system.factorisation}), order {order}: {total:.1f} s")
+    for s in r.steps:
+        print(f"  cell {s.cell:2d}: {s.seconds:6.1f} s  F_cr {s.F_cr:.3f} N  push {s.push_status[:40]!r}"
+              f"  snapped {int(s.snapped.sum())}  stable {s.stable}  global mode {s.global_mode}")
+    return total
+
+
+def main():
+    from snapmorph.units.sheet import simulate_sheet  # noqa: F401 - compile outside the timing
+    from snapmorph.units.frame3d import UnitGeometry
+    from snapmorph.units.sheet import build_sheet
+
+    warm = build_sheet(UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3), "square", (1, 1))
+    simulate_sheet(warm, [0])
+    t = run((3, 3), centre_out(3, 3))
+    print(f"3x3, all nine cells: {t:.1f} s (target <= {TARGET_3X3_S:.0f} s on one core: "
+          f"{'met' if t <= TARGET_3X3_S else 'NOT met'})")
+    n6 = int(os.environ.get("BENCH_SHEET_6X6_CELLS", "4"))
+    run((6, 6), centre_out(6, 6)[:n6])
+
+
+if __name__ == "__main__":
+    main()

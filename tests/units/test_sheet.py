@@ -1,0 +1,179 @@
+"""Sheets tiled from 2-D units (`units.sheet`, `units.sheet_mesh`): the tilings' topology,
+input checks, a 1 x 1 sheet against the 2-D unit, and a 3 x 3 sheet snapped cell by cell
+with every released state checked as an equilibrium and its stability checked by the
+eigenvalues of its reduced stiffness (dense, numpy), independently of the LDL^T count."""
+
+import numpy as np
+import pytest
+import scipy.sparse
+import scipy.sparse.linalg
+
+from snapmorph.units.frame3d import UnitGeometry
+from snapmorph.units.sheet import (apex_heights, build_sheet, explore_orders, shape_distance,
+                                   sheet_structure, simulate_sheet)
+from snapmorph.units.unit2d import edge_metrics, simulate_unit_2d
+
+G = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
+
+
+def _lowest_eigenvalues(band, k=6):
+    """The k eigenvalues nearest zero of the symmetric K in lower band storage
+    (``band[i, j] = K[j + i, j]``), by ARPACK shift-invert about 0 on scipy's own sparse
+    matrix: independent of both LDL^T factorisations."""
+    n = band.shape[1]
+    lower = scipy.sparse.diags([band[i, : n - i] for i in range(band.shape[0])],
+                               [-i for i in range(band.shape[0])], shape=(n, n), format="csc")
+    K = lower + scipy.sparse.triu(lower.T, k=1)
+    vals = scipy.sparse.linalg.eigsh(K.tocsc(), k=k, sigma=0.0, which="LM",
+                                     return_eigenvectors=False)
+    return np.sort(vals)
+
+
+@pytest.mark.parametrize("tiling, cells, n_edges, interior", [
+    ("square", (3, 3), 24, 12), ("square", (1, 1), 4, 0), ("hexagon", (2, 2), 19, 5),
+    ("triangle", (2, 3), 13, 5), ("square", 6, 17, 7)])
+def test_tilings_share_their_edge_strips(tiling, cells, n_edges, interior):
+    sheet = build_sheet(G if tiling != "triangle" else UnitGeometry(L=0.1, h=0.02, t=0.5e-3,
+                                                                   w=5e-3),
+                        tiling, cells, nodes=11)
+    assert len(sheet.edge_nodes) == n_edges
+    assert sum(len(c) == 2 for c in sheet.edge_cells) == interior
+    assert all(len(c) in (1, 2) for c in sheet.edge_cells)
+    sides = {"square": 4, "triangle": 3, "hexagon": 6}[tiling]
+    assert all(len(e) == sides for e in sheet.edges)
+    # the released structure has no rigid-body mode: K at the stress-free state is definite
+    st = sheet_structure(sheet)
+    system = st.reduced_system()
+    system.evaluate(st.initial_state())
+    assert system.factor() and system.negative_eigenvalues == 0
+    assert _lowest_eigenvalues(system.band, 1)[0] > 0
+    assert np.allclose(apex_heights(sheet, sheet.mesh.positions), sheet.geometry.h)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"tiling": "pentagon"}, "tiling must be one of"),
+    ({"cells": (0, 3)}, "cells must be"),
+    ({"cells": 1000}, r"cells \(number of cells\)"),
+    ({"cells": "3x3"}, "cells must be"),
+    ({"nodes": 5}, r"nodes \(resolution"),
+])
+def test_bad_sheets_are_refused_naming_the_parameter(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        build_sheet(G, **{"tiling": "square", "cells": (2, 2), **kwargs})
+
+
+def test_bad_orders_and_boundaries_are_refused():
+    sheet = build_sheet(G, "square", (2, 2), nodes=11)
+    with pytest.raises(ValueError, match=r"order must be .* in \[0, 3\]"):
+        simulate_sheet(sheet, [4])
+    with pytest.raises(ValueError, match="order must be"):
+        simulate_sheet(sheet, [])
+    with pytest.raises(ValueError, match="boundary must be one of"):
+        simulate_sheet(sheet, [0], boundary="pinned")
+    with pytest.raises(ValueError, match="distinct"):
+        explore_orders(sheet, [0, 0], orders=2)
+
+
+def test_shape_distance_ignores_rigid_motion():
+    X = np.random.default_rng(0).normal(size=(50, 3))
+    c, s = np.cos(0.3), np.sin(0.3)
+    R = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
+    assert shape_distance(X, X @ R.T + [1.0, 2.0, 3.0]) < 1e-12
+    Y = X.copy()
+    Y[0] += [0.0, 0.0, 0.1]
+    assert 0.05 < shape_distance(X, Y) <= 0.1
+
+
+@pytest.mark.slow
+def test_one_by_one_square_sheet_is_the_2d_unit():
+    """F_cr and every side's curvature in state (iii) within 1 % of `simulate_unit_2d`
+    (same mesh resolution; the sheet's rods are numbered and oriented differently)."""
+    unit = simulate_unit_2d(G, nodes=21, check_self_standing=False)
+    sheet = build_sheet(G, "square", (1, 1), nodes=21)
+    step = simulate_sheet(sheet, [0]).final
+    assert step.push_status == "ok" and unit.status == "ok"
+    assert step.F_cr == pytest.approx(unit.F_cr, rel=0.01)
+    sides = ("south", "east", "north", "west")  # edges 0-3 of the 1 x 1 tiling
+    for e, side in enumerate(sides):
+        k = edge_metrics(step.pushed[sheet.edge_nodes[e]])["curvature"]
+        assert k == pytest.approx(unit.edges["iii"][side]["curvature"], rel=0.01), side
+    assert step.snapped.tolist() == [True] and step.stable
+
+
+@pytest.fixture(scope="module")
+def snapped_3x3():
+    """The centre, then two opposite corners (all nine cells: bench/bench_sheet.py; the
+    mesh convergence of the final shape: studies/sheets.py, docs/sheets.md)."""
+    sheet = build_sheet(G, "square", (3, 3), nodes=21)
+    return sheet, simulate_sheet(sheet, [4, 0, 8])
+
+
+@pytest.mark.slow
+def test_3x3_sheet_every_step_is_an_equilibrium_with_its_stability_checked(snapped_3x3):
+    sheet, result = snapped_3x3
+    st = sheet_structure(sheet)
+    system = st.reduced_system()
+    length = st.scales()[0]
+    assert len(result.steps) == 3
+    for step in result.steps:
+        assert np.isfinite(step.F_cr), step
+        # an equilibrium under no load: the Newton correction from it is below 1e-9 L (the
+        # drivers converge on 1e-11 L; the stiff stretching terms keep the residual itself
+        # at round-off of their forces)
+        system.evaluate(step.state)
+        assert system.factor()
+        assert np.max(np.abs(system.solve(system.grad))) <= 1e-9 * length
+        system.evaluate(step.state)
+        eig = _lowest_eigenvalues(system.band)  # the 6 nearest zero, where a snap shows
+        assert step.stable == (eig[0] > 0)
+        if step.stable:
+            assert step.negative_eigenvalues == 0
+        else:
+            assert step.negative_eigenvalues == int(np.sum(eig < 0))
+        assert step.snapped[step.cell] or not step.stable
+    assert result.final is result.steps[-1]
+    assert result.final.stable
+
+
+@pytest.mark.slow
+def test_3x3_sheet_snaps_the_pushed_cells(snapped_3x3):
+    sheet, result = snapped_3x3
+    first = result.steps[0]
+    assert first.cell == 4 and first.snapped[4]
+    assert np.isfinite(first.F_cr) and first.F_cr > 0
+    assert first.d.shape == first.F.shape and first.positions.shape == (sheet.mesh.n_nodes, 3)
+    heights = apex_heights(sheet, result.final.positions)
+    assert np.array_equal(heights < 0, result.final.snapped)
+
+
+def test_fast_prediction_sums_the_unit_curvatures_of_the_snapped_cells():
+    from snapmorph.units.sheet import predict_edge_curvatures
+
+    sheet = build_sheet(G, "square", (1, 2), nodes=11)  # cells 0 | 1, sharing one edge
+    k = np.array([1.0, 2.0, 3.0, 4.0])  # south, east, north, west of a unit
+    shared = set(sheet.edges[0]) & set(sheet.edges[1])
+    assert len(shared) == 1
+    (e,) = shared
+    p = predict_edge_curvatures(sheet, [True, False], k)
+    assert p[e] == 2.0  # cell 0's east side
+    assert p[sheet.edges[1][0]] == 0.0  # cell 1's south: not snapped
+    p = predict_edge_curvatures(sheet, [True, True], k)
+    assert p[e] == 2.0 + 4.0  # cell 0's east plus cell 1's west
+    assert np.count_nonzero(p) == len(p)
+
+
+@pytest.mark.slow
+def test_explore_orders_runs_every_order_and_groups_the_finals():
+    sheet = build_sheet(G, "square", (1, 2), nodes=21)
+    out = explore_orders(sheet, [0, 1], orders=2)
+    assert out["orders"] == [[0, 1], [1, 0]]
+    assert len(out["results"]) == 2 and out["distances"].shape == (2, 2)
+    d = out["distances"][0, 1]
+    grouped = sum(len(g["orders"]) for g in out["groups"])
+    assert grouped == 2
+    assert len(out["groups"]) == (1 if d <= 0.01 * G.L else 2)
+    for g in out["groups"]:
+        final = out["results"][g["orders"][0]].final
+        assert g["snapped"] == np.flatnonzero(final.snapped).tolist()
+        assert g["stable"] == final.stable
+    assert out["distinct"] == sum(g["stable"] for g in out["groups"])

@@ -1,0 +1,336 @@
+"""Sheets of 2-D units snapped cell by cell, and their memory (issue 25).
+
+    >>> from snapmorph.units.sheet import build_sheet, simulate_sheet
+    >>> sheet = build_sheet(UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3), "square", (3, 3))
+    >>> r = simulate_sheet(sheet, order=[4, 0, 8])
+    >>> [(s.cell, s.F_cr, s.snapped.sum(), s.stable) for s in r.steps]
+
+A push of cell c is the 2-D unit's experiment on that cell inside the sheet (`units.push3d`,
+the one push-through protocol): the nodes of its arches next to its apex move as one, its
+apex cannot move in x or y and is pushed down (-z), and z is held at its sides' midpoints
+(the rig it stands on), from the state the previous step left (d from there). The
+actuator is then released: the rig is removed, only the sheet's boundary condition is
+kept, and the sheet relaxes to the stable equilibrium next to the pushed state
+(`units.push3d.relax_released`: Newton, and where that equilibrium is unstable — a global
+mode of the sheet — the energy descent along its negative mode into the stable shape it
+falls into, reported in ``global_mode``).
+
+Boundary conditions: ``"free"`` — the sheet's rigid-body motion held by a statically
+determinate set of six components (`units.sheet_mesh.free_holds`: a midpoint of cell 0
+in x, y, z, the midpoint farthest from it in the two components across the line between
+them, one more midpoint in z), whose reactions vanish under no load; ``"clamped-edge"`` —
+the edges of the sheet's bottom boundary (least y) held: every node's position, and a clamp
+frame at each edge's first node (its tangent and twist). A cell is snapped when its apex is
+below the mean height of its sides' midpoints. SI units.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from snapmorph.units.frame3d import PETG_NU, UnitGeometry
+from snapmorph.units.push3d import path_states, push_through, relax_released
+from snapmorph.units.sheet_mesh import TILINGS, SheetModel, build_sheet_mesh, check_cells
+
+__all__ = ["BOUNDARIES", "DEFAULT_NODES_SHEET", "SheetStep", "SheetResult", "build_sheet",
+           "simulate_sheet", "apex_heights", "sheet_structure", "explore_orders",
+           "shape_distance", "TILINGS", "check_cells", "edge_curvatures",
+           "predict_edge_curvatures", "coupling_error"]
+
+BOUNDARIES = ("free", "clamped-edge")
+#: default resolution of a sheet's cells: nodes along a side (the unit's is 41)
+DEFAULT_NODES_SHEET = 21
+NAN = float("nan")
+
+
+def build_sheet(geometry: UnitGeometry, tiling: str = "square", cells=(3, 3),
+                nodes: int = DEFAULT_NODES_SHEET, nu: float = PETG_NU,
+                overlaps: str = "elastic") -> SheetModel:
+    """A sheet of ``cells`` ((rows, cols) or a count) 2-D units of ``geometry`` tiled by
+    ``tiling`` ("square", "triangle", "hexagon"), sharing their edge strips
+    (`units.sheet_mesh.build_sheet_mesh`; L is the side of every cell)."""
+    if not isinstance(geometry, UnitGeometry):
+        raise ValueError(f"geometry must be a UnitGeometry; got {type(geometry).__name__}")
+    return build_sheet_mesh(geometry, tiling, cells, nodes=nodes, nu=nu, overlaps=overlaps)
+
+
+def _clamped_edges(sheet: SheetModel) -> list:
+    """The boundary edges at the sheet's least y (both ends there)."""
+    X = sheet.mesh.positions
+    y0 = float(np.min(X[:, 1]))
+    tol = 1e-9 * sheet.geometry.L
+    return [e for e in sheet.boundary_edges()
+            if abs(X[sheet.edge_nodes[e][0], 1] - y0) <= tol
+            and abs(X[sheet.edge_nodes[e][-1], 1] - y0) <= tol]
+
+
+def sheet_structure(sheet: SheetModel, boundary: str = "free", cell: int | None = None):
+    """The `solver.Structure3D` of ``sheet`` under ``boundary`` with the rig of ``cell``
+    (actuator and supports, module docstring) or released (None). The node numbering and the
+    state layout are the same for every cell and boundary."""
+    check_boundary(boundary)
+    fixes, rigid = [], []
+    if cell is not None:
+        rigid.append(list(sheet.ring[cell]))
+        fixes.append((int(sheet.apex[cell]), "xy"))
+        fixes += [(int(n), "z") for n in sheet.feet[cell]]
+    elif boundary == "free":
+        fixes += list(sheet.holds)
+    clamped = _clamped_edges(sheet) if boundary == "clamped-edge" else []
+    held = sorted({int(n) for e in clamped for n in sheet.edge_nodes[e]})
+    fixes += [(n, "xyz") for n in held]
+    st = dataclasses.replace(sheet.mesh, fixes=fixes, rigid=rigid).to_structure()
+    for e in clamped:
+        st.clamp(int(sheet.edge_nodes[e][0]), toward=int(sheet.edge_nodes[e][1]))
+    return st
+
+
+def check_boundary(boundary):
+    if boundary not in BOUNDARIES:
+        raise ValueError(f"boundary must be one of {BOUNDARIES}; got {boundary!r}")
+
+
+def apex_heights(sheet: SheetModel, positions) -> np.ndarray:
+    """(n_cells,) m: every cell's apex above the mean height of its sides' midpoints (h as
+    made, < 0 when the cell is snapped)."""
+    P = np.asarray(positions)
+    return np.array([P[a, 2] - np.mean(P[f, 2]) for a, f in zip(sheet.apex, sheet.feet)])
+
+
+@dataclass(repr=False)
+class SheetStep:
+    """One push of a sheet and its release (SI). ``cell``: the cell pushed; ``d``, ``F``:
+    its force path (m, N; d the apex's travel from the state before); ``F_cr`` (N, NaN: no
+    peak); ``push_status``: the push-through's outcome for that cell (`units.status`);
+    ``snapped`` (n_cells,) bool after the release; ``stable``: the released sheet is a
+    stable equilibrium (no negative eigenvalue of its tangent stiffness,
+    ``negative_eigenvalues``; None: singular or not found); ``global_mode``: the equilibrium
+    next to the pushed state was unstable and the sheet fell along its negative mode into
+    the stable shape reported here; ``positions`` (n_nodes, 3) m and ``state`` (full state)
+    of the released sheet; ``apex_heights`` (n_cells,) m; ``moved``: largest node
+    displacement in the release, m; ``reason``: "" or why the release found no stable
+    state; ``pushed``: (n_nodes, 3) m, the state the release started from (the pushed
+    cell's state (iii), actuator on at F = 0, or the push's last state when there is
+    none)."""
+
+    cell: int
+    d: np.ndarray
+    F: np.ndarray
+    F_cr: float
+    push_status: str
+    snapped: np.ndarray
+    stable: bool
+    negative_eigenvalues: int | None
+    global_mode: bool
+    positions: np.ndarray
+    state: np.ndarray
+    apex_heights: np.ndarray
+    moved: float = NAN
+    reason: str = ""
+    seconds: float = NAN
+    pushed: np.ndarray | None = None
+
+    def __repr__(self):
+        return (f"SheetStep(cell={self.cell}, F_cr={self.F_cr:.4g} N, push={self.push_status!r}, "
+                f"snapped={np.flatnonzero(self.snapped).tolist()}, stable={self.stable}, "
+                f"global_mode={self.global_mode})")
+
+
+@dataclass(repr=False)
+class SheetResult:
+    """The steps of `simulate_sheet` in push order; ``final``: the last step (None: no
+    step); ``boundary``; ``order``; ``solve_time`` s."""
+
+    sheet: SheetModel
+    boundary: str
+    order: list
+    steps: list = field(default_factory=list)
+    solve_time: float = NAN
+
+    @property
+    def final(self):
+        return self.steps[-1] if self.steps else None
+
+    def __repr__(self):
+        f = self.final
+        return (f"SheetResult({self.sheet.tiling} {self.sheet.shape[0]}x{self.sheet.shape[1]}, "
+                f"order={self.order}, boundary={self.boundary!r}, final snapped="
+                f"{np.flatnonzero(f.snapped).tolist() if f else []}, stable="
+                f"{f.stable if f else None})")
+
+
+def check_order(sheet: SheetModel, order) -> list:
+    """``order`` as a list of cell indices, or a ValueError naming the valid range."""
+    try:
+        out = [int(c) for c in order]
+        ok = all(float(c) == int(c) and not isinstance(c, (bool, np.bool_)) for c in order)
+    except (TypeError, ValueError):
+        ok, out = False, []
+    n = sheet.n_cells
+    if not ok or not out or any(not 0 <= c < n for c in out):
+        raise ValueError(f"order must be a non-empty list of cell indices in [0, {n - 1}]; "
+                         f"got {order!r}")
+    return out
+
+
+def simulate_sheet(sheet: SheetModel, order, boundary: str = "free", steps: int = 60,
+                   start=None) -> SheetResult:
+    """Push the cells of ``order`` one at a time (actuator on, then released; module
+    docstring) from ``start`` (a full state of the released sheet; None: as made).
+    Returns a `SheetResult`; failures of a push come back in its step's ``push_status``."""
+    check_boundary(boundary)
+    order = check_order(sheet, order)
+    t0 = time.perf_counter()
+    released = sheet_structure(sheet, boundary)
+    q = np.array(released.initial_state() if start is None else start, dtype=float)
+    result = SheetResult(sheet, boundary, order)
+    for c in order:
+        result.steps.append(_step(sheet, boundary, released, c, q, steps))
+        q = result.steps[-1].state
+    result.solve_time = time.perf_counter() - t0
+    return result
+
+
+def _step(sheet, boundary, released, cell, q, steps):
+    """Push ``cell`` from the released state ``q`` and release it: a `SheetStep`."""
+    t0 = time.perf_counter()
+    g = sheet.geometry
+    st = sheet_structure(sheet, boundary, cell)
+    fresh = not np.any(q - released.initial_state())
+    out = push_through(st, int(sheet.apex[cell]), 3.0 * g.h, steps=int(steps),
+                       start=None if fresh else q)
+    pushed = out.full_states.get("iii")
+    if pushed is None and out.path is not None and len(out.path.positions):
+        pushed = path_states(st, out.path)[-1]
+    if pushed is None:
+        pushed = q
+    qr, neg, moved, why, first = relax_released(released, pushed)
+    if qr is None:
+        qr = np.asarray(pushed, dtype=float)
+    pos = np.array(released.positions_of(qr))
+    heights = apex_heights(sheet, pos)
+    d, F = (np.asarray(a, dtype=float) for a in out.curve)
+    return SheetStep(cell, d, F, float(out.F_cr), out.status, heights < 0.0,
+                     neg == 0, neg, first is None or first > 0, pos, np.array(qr), heights,
+                     moved, why, time.perf_counter() - t0,
+                     np.array(released.positions_of(pushed)))
+
+
+# ---------------------------------------------------------------------------- memory
+
+
+def shape_distance(a, b) -> float:
+    """Largest node distance (m) between two sheet shapes (n, 3) after the rigid motion
+    that best superposes them (Kabsch, least squares): 0 for the same shape however it is
+    placed."""
+    A, B = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    ca, cb = A.mean(axis=0), B.mean(axis=0)
+    U, _, Vt = np.linalg.svd((B - cb).T @ (A - ca))
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
+    R = U @ D @ Vt
+    return float(np.max(np.linalg.norm((B - cb) @ R - (A - ca), axis=1)))
+
+
+def _orders(cells, orders, seed):
+    """The orders to run: a list of permutations of ``cells`` as given, or (an int n) the
+    identity, its reverse and n - 2 more distinct permutations drawn with ``seed``."""
+    if not isinstance(orders, (int, np.integer)):
+        return [list(map(int, o)) for o in orders]
+    n = int(orders)
+    out = [list(cells), list(cells)[::-1]][:n]
+    rng = np.random.default_rng(seed)
+    tries = 0
+    while len(out) < n and tries < 100 * n:
+        p = [int(c) for c in rng.permutation(cells)]
+        tries += 1
+        if p not in out:
+            out.append(p)
+    return out
+
+
+def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
+                   tol: float | None = None, seed: int = 0, steps: int = 60) -> dict:
+    """Snap the same set of ``cells`` in many ``orders`` (a list of permutations, or a
+    count: that many distinct ones, `_orders`) and group the final states by
+    `shape_distance` (two finals are one shape when within ``tol``, default L / 100).
+
+    Returns {"orders": the orders run, "results": their `SheetResult`s, "groups": [{"orders":
+    indices into "orders", "snapped": cells snapped in the shape, "stable": bool,
+    "positions": (n, 3) of the first, "spread": largest distance to it (m)}], "distinct":
+    the number of distinct stable shapes, "distances": (n, n) m between the finals}."""
+    cells = check_order(sheet, cells)
+    if len(set(cells)) != len(cells):
+        raise ValueError(f"cells must be distinct cell indices; got {cells!r}")
+    tol = 0.01 * sheet.geometry.L if tol is None else float(tol)
+    runs = _orders(cells, orders, seed)
+    for o in runs:
+        if sorted(o) != sorted(cells):
+            raise ValueError(f"every order must be a permutation of cells {cells}; got {o}")
+    results = [simulate_sheet(sheet, o, boundary, steps=steps) for o in runs]
+    finals = [r.final.positions for r in results]
+    n = len(finals)
+    dist = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1, n):
+            dist[i, j] = dist[j, i] = shape_distance(finals[i], finals[j])
+    groups = []
+    for i, r in enumerate(results):
+        for grp in groups:
+            if dist[i, grp["orders"][0]] <= tol:
+                grp["orders"].append(i)
+                grp["spread"] = max(grp["spread"], float(dist[i, grp["orders"][0]]))
+                break
+        else:
+            groups.append({"orders": [i], "snapped": np.flatnonzero(r.final.snapped).tolist(),
+                           "stable": bool(r.final.stable), "positions": finals[i],
+                           "spread": 0.0})
+    distinct = sum(1 for grp in groups if grp["stable"])
+    return {"orders": runs, "results": results, "groups": groups, "distinct": distinct,
+            "distances": dist}
+
+
+# ---------------------------------------------------------------------------- prediction
+
+
+def edge_curvatures(sheet: SheetModel, positions) -> np.ndarray:
+    """(n_edges,) mean curvature (1/m) of every edge strip of the sheet in a state
+    (`units.unit2d.edge_metrics`: theta / arc length, > 0 when the ends rise)."""
+    from snapmorph.units.unit2d import edge_metrics
+
+    P = np.asarray(positions)
+    return np.array([edge_metrics(P[n])["curvature"] for n in sheet.edge_nodes])
+
+
+def predict_edge_curvatures(sheet: SheetModel, snapped, unit_curvatures) -> np.ndarray:
+    """The fast prediction of a sheet's edge curvatures from unit data: every snapped cell
+    bends each of its sides as the unit alone bends that side (``unit_curvatures``: (sides,)
+    1/m, side k of a cell from vertex k to k + 1 counter-clockwise, e.g. the released
+    unit's per-side curvatures of `simulate_unit_2d` in its side order), cells as made add
+    nothing, and an edge two cells share takes the sum of both. No coupling between cells:
+    the difference from the whole-sheet simulation is the coupling error."""
+    snapped = np.asarray(snapped, dtype=bool)
+    k = np.asarray(unit_curvatures, dtype=float)
+    out = np.zeros(len(sheet.edge_nodes))
+    for c, edges in enumerate(sheet.edges):
+        if snapped[c]:
+            for side, e in enumerate(edges):
+                out[e] += k[side]
+    return out
+
+
+def coupling_error(sheet: SheetModel, step, unit_curvatures) -> dict:
+    """The prediction of `predict_edge_curvatures` for a step's snapped cells against its
+    released sheet: {"predicted", "simulated" (n_edges,) 1/m, "rms_error" 1/m, "relative"
+    (rms error / rms simulated), "max_error" 1/m}."""
+    sim = edge_curvatures(sheet, step.positions)
+    pred = predict_edge_curvatures(sheet, step.snapped, unit_curvatures)
+    err = pred - sim
+    rms = float(np.sqrt(np.mean(err ** 2)))
+    scale = float(np.sqrt(np.mean(sim ** 2)))
+    return {"predicted": pred, "simulated": sim, "rms_error": rms,
+            "relative": rms / scale if scale > 0 else NAN,
+            "max_error": float(np.max(np.abs(err)))}
