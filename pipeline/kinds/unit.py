@@ -161,14 +161,15 @@ def _lin(lo: float, hi: float, n: int) -> tuple[float, ...]:
     return tuple(float(round(v, 12)) for v in np.linspace(lo, hi, n))
 
 
-#: the b/L axis of the default map: the paper's b = w (b/L = 0.05 at L = 100 mm, w = 5 mm),
-#: the maps before schema 3 (0), and up to 0.15, the largest b/L at which every (h, w) of the
-#: grid is a valid unit (h/L <= 1 - 2 (b + w) / L with h/L = 0.5, w/L = 0.1)
-DEFAULT_B_OVER_L = (0.0, 0.05, 0.10, 0.15)
+#: the b/L axis of the default map: the maps before schema 3 (0), the paper's b = w (b/L = 0.05
+#: at L = 100 mm, w = 5 mm) and 0.10. The declared domain at h/L = 0.5, w/L = 0.1 reaches 0.15
+#: (h/L <= 1 - 2 (b + w) / L), but today's unit model fails at 204 of the 3726 points there
+#: ("the zero-force state was not located") and a fourth value costs 40 % more build time
+DEFAULT_B_OVER_L = (0.0, 0.05, 0.10)
 
 
 def _preset_default() -> Grid:
-    # 46 x 9 x 9 x 4 = 14904 points; steps 0.01, 0.00125, 0.01 put the paper's t/L = 0.005,
+    # 46 x 9 x 9 x 3 = 11178 points; steps 0.01, 0.00125, 0.01 put the paper's t/L = 0.005,
     # 0.0075 and w/L = 0.05 exactly on the grid, and its h, t, w axes are those of the
     # three-axis map (schema 2, b/L = 0) it replaces, so that every old point is a new one.
     return Grid(
