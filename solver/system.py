@@ -74,6 +74,7 @@ class BandedSystem:
         self._element_dofs = element_dofs
         self._sparse = None
         self._sparse_solves = False  # solve() uses the sparse factor
+        self._splu = None  # solve() uses this SuperLU factor (`_factor_sparse_pivoting`)
         self.grad = np.zeros(max(self.n, 1))
         self.grad_full = np.zeros(self.dof_map.shape[0])
         self._work = np.zeros((max(self.n, 1), 3))
@@ -102,6 +103,7 @@ class BandedSystem:
         chosen) falls back to the banded one below when its pivots are too small.
         """
         self._sparse_solves = False
+        self._splu = None
         if self.factorisation == "sparse":
             if self._factor_sparse():
                 return True
@@ -165,7 +167,8 @@ class BandedSystem:
         f.factor_ok = False
         if status != 0:
             return False
-        self._dense_lu = ("splu", lu)
+        self._dense_lu = None
+        self._splu = lu
         self.negative_eigenvalues = int(negative)
         self.factor_ok = True
         return True
@@ -174,6 +177,7 @@ class BandedSystem:
         """`solve` with the LDL^T factor the caller has made in ``band`` itself."""
         self._dense_lu = None
         self._sparse_solves = False
+        self._splu = None
 
     def solve(self, rhs):
         """Solve K X = rhs for rhs (n,) or (n, m); returns a new array."""
@@ -182,8 +186,8 @@ class BandedSystem:
         b2 = b.reshape(self.n, -1)
         if self._sparse_solves:
             out = self._sparse.solve(b2)
-        elif isinstance(self._dense_lu, tuple) and self._dense_lu[0] == "splu":
-            out = self._dense_lu[1].solve(np.ascontiguousarray(b2))
+        elif self._splu is not None:
+            out = self._splu.solve(np.ascontiguousarray(b2))
         elif self._dense_lu is not None:
             out = scipy.linalg.lu_solve(self._dense_lu, b2, check_finite=False)
         else:
@@ -222,6 +226,7 @@ class BandedSystem:
         self.energy = energy
         self._dense_lu = None
         self._sparse_solves = False
+        self._splu = None
         self.factor_ok = status != 1
         if status != 1:
             self.negative_eigenvalues = int(neg)

@@ -249,3 +249,17 @@ def test_2d_unit_pushed_on_the_sparse_path_gives_the_banded_results_within_round
     assert banded.bistable and sparse.bistable
     assert sparse.F_cr == pytest.approx(banded.F_cr, rel=1e-9)
     assert sparse.curvature == pytest.approx(banded.curvature, rel=1e-9)
+
+
+def test_banded_system_dense_fallback_still_solves(unit3d):
+    """A zero leading pivot: the banded LDL^T fails and the dense pivoting fallback solves
+    (its LU factor is a tuple, which must not be taken for the sparse fallback's)."""
+    sysm = unit3d.reduced_system()
+    assert sysm.factorisation == "banded"
+    sysm.evaluate(unit3d.initial_state())
+    sysm.band[0, 0] = 0.0
+    K = band_to_dense(sysm.band)
+    assert sysm.factor()
+    b = np.random.default_rng(7).normal(size=sysm.n)
+    x = sysm.solve(b)
+    assert np.linalg.norm(K @ x - b) <= 1e-8 * np.linalg.norm(b) * np.linalg.cond(K) ** 0.5
