@@ -13,7 +13,7 @@ def test_default_preset_covers_the_required_ranges():
     assert len(g.h_over_L) >= 46 and (g.h_over_L[0], g.h_over_L[-1]) == (0.05, 0.50)
     assert len(g.t_over_L) >= 9 and (g.t_over_L[0], g.t_over_L[-1]) == (0.0025, 0.0125)
     assert len(g.w_over_L) >= 9 and (g.w_over_L[0], g.w_over_L[-1]) == (0.02, 0.10)
-    assert g.b_over_L == (0.0, 0.05, 0.1)  # schema 3: b/L is an axis, the paper's b = w on it
+    assert g.b_over_L == (0.0, 0.05)  # schema 3: b/L is an axis, the paper's b = w on it
     # the paper's parametric maps sit on grid lines
     assert 0.005 in g.t_over_L and 0.0075 in g.t_over_L and 0.05 in g.w_over_L
 
