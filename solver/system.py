@@ -138,10 +138,13 @@ class BandedSystem:
             self._sparse = SparseLDLT(self.n, *self._element_dofs)
         self._sparse.from_band(self.band)
         status, negative, _ = self._sparse.factor(PIVOT_TOL)
-        if status != 0:
-            return False
+        return status == 0 and self._factored(negative)
+
+    def _factored(self, negative, splu=None):
+        """Record a sparse factorisation (``splu``: the pivoting fallback's) for `solve`."""
         self._dense_lu = None
-        self._sparse_solves = True
+        self._sparse_solves = splu is None
+        self._splu = splu
         self.negative_eigenvalues = int(negative)
         self.factor_ok = True
         return True
@@ -165,13 +168,7 @@ class BandedSystem:
         status, negative, _ = f.factor(0.0)
         f.data[:] = values
         f.factor_ok = False
-        if status != 0:
-            return False
-        self._dense_lu = None
-        self._splu = lu
-        self.negative_eigenvalues = int(negative)
-        self.factor_ok = True
-        return True
+        return status == 0 and self._factored(negative, lu)
 
     def use_band_factor(self):
         """`solve` with the LDL^T factor the caller has made in ``band`` itself."""
