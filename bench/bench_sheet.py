@@ -43,10 +43,11 @@ def run(shape, order):
     r = simulate_sheet(sheet, order)
     total = time.perf_counter() - t0
     print(f"sheet {shape[0]}x{shape[1]}: {sheet.mesh.n_nodes} nodes, {system.n} DOFs "
-          f"({system.factorisation}), order {order}: {total:.1f} s")
+          f"({system.factorisation}), order {order}: {total:.1f} s", flush=True)
     for s in r.steps:
         print(f"  cell {s.cell:2d}: {s.seconds:6.1f} s  F_cr {s.F_cr:.3f} N  push {s.push_status[:40]!r}"
-              f"  snapped {int(s.snapped.sum())}  stable {s.stable}  global mode {s.global_mode}")
+              f"  snapped {int(s.snapped.sum())}  stable {s.stable}  global mode {s.global_mode}",
+              flush=True)
     return total
 
 
@@ -59,7 +60,7 @@ def main():
     simulate_sheet(warm, [0])
     t = run((3, 3), centre_out(3, 3))
     print(f"3x3, all nine cells: {t:.1f} s (target <= {TARGET_3X3_S:.0f} s on one core: "
-          f"{'met' if t <= TARGET_3X3_S else 'NOT met'})")
+          f"{'met' if t <= TARGET_3X3_S else 'NOT met'})", flush=True)
     n6 = int(os.environ.get("BENCH_SHEET_6X6_CELLS", "4"))
     run((6, 6), centre_out(6, 6)[:n6])
 
