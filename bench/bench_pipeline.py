@@ -75,5 +75,32 @@ def main() -> None:
               f"same bytes: {same_bytes} (differ only if the solver source changed in between)")
 
 
+def default_map_estimate(n: int = 40, seed: int = 0) -> None:
+    """The default map (its b/L axis included): its size and a build-time estimate on two
+    cores from n of its points drawn at random and solved here, one after another (the
+    build's own figure, from `make maps`, is in pipeline/README.md)."""
+    import numpy as np
+
+    from snapmorph.pipeline import preset
+    from snapmorph.pipeline.kinds.unit import solve_point
+
+    grid = preset("default")
+    axes = [np.asarray(a, dtype=float) for a in
+            (grid.h_over_L, grid.t_over_L, grid.w_over_L, np.atleast_1d(grid.b_over_L))]
+    total = int(np.prod([len(a) for a in axes]))
+    rng = np.random.default_rng(seed)
+    points = [tuple(float(a[rng.integers(len(a))]) for a in axes) for _ in range(n)]
+    solve_point(*points[0], resolution=grid.resolution)  # kernels compiled or loaded
+    t0, c0 = time.perf_counter(), time.process_time()
+    for p in points:
+        solve_point(*p, resolution=grid.resolution)
+    wall, cpu = (time.perf_counter() - t0) / n, (time.process_time() - c0) / n
+    print(f"default map: {' x '.join(str(len(a)) for a in axes)} = {total} points "
+          f"(b/L {', '.join(f'{b:g}' for b in axes[3])}); {n} random points solved here: "
+          f"{wall * 1e3:.0f} ms wall, {cpu * 1e3:.0f} ms CPU per point -> about "
+          f"{total * cpu / 2 / 60:.1f} min of solving on two free cores")
+
+
 if __name__ == "__main__":
     main()
+    default_map_estimate()
