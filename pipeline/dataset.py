@@ -12,25 +12,14 @@ attribute names the netCDF-C and HDF5 versions, so the bytes are those of one li
 from __future__ import annotations
 
 import os
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from snapmorph.maps.schema import SOLVE_TIME_ATTRS, status_attrs
-from snapmorph.pipeline.fingerprint import canonical
-
-#: the package version recorded in a map when the installed metadata says none
-UNKNOWN_VERSION = "unknown"
-
-
-def package_version() -> str:
-    """The installed snapmorph's version (its distribution metadata)."""
-    try:
-        return metadata.version("snapmorph")
-    except metadata.PackageNotFoundError:
-        return UNKNOWN_VERSION
+# the version a map records is a build input, so it lives with the fingerprint
+from snapmorph.pipeline.fingerprint import UNKNOWN_VERSION, canonical, package_version
 
 
 def provenance() -> dict:

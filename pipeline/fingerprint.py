@@ -19,6 +19,7 @@ import ast
 import hashlib
 import importlib.util
 import json
+from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -170,14 +171,20 @@ def build_inputs(spec, grid, options: dict, solver: str, source_sha256: str) -> 
         "solver_source_sha256": source_sha256,
         # the version the file states is an input too, so that it cannot change the bytes of
         # a map that is up to date
-        "package_version": _package_version(),
+        "package_version": package_version(),
     }
 
 
-def _package_version() -> str:
-    from snapmorph.pipeline.dataset import package_version
+#: the package version recorded in a map when the installed metadata says none
+UNKNOWN_VERSION = "unknown"
 
-    return package_version()
+
+def package_version() -> str:
+    """The installed snapmorph's version (its distribution metadata)."""
+    try:
+        return metadata.version("snapmorph")
+    except metadata.PackageNotFoundError:
+        return UNKNOWN_VERSION
 
 
 def fingerprint(inputs: dict) -> str:
