@@ -344,19 +344,26 @@ class _Fit:
         return ((R[1:] - R[0]) / h[:, None]).T
 
     def solve(self, v0, weights=None, max_nfev=25):
-        from scipy.optimize import least_squares
+        return bounded_least_squares(self, v0, weights, max_nfev)
 
-        lo, hi = self.bounds()
-        v0 = np.clip(v0, lo + 1e-12, hi - 1e-12)
-        if weights is None:
-            fun, jac = self.residuals, self.jac
-        else:
-            fun = lambda v: weights * self.residuals(v)  # noqa: E731
-            jac = lambda v: weights[:, None] * self.jac(v)  # noqa: E731
-        # the residuals are distances of ~1e-3 of the length: 1e-6 relative is plenty
-        sol = least_squares(fun, v0, jac=jac, bounds=(lo, hi), x_scale="jac", xtol=1e-7,
-                            ftol=1e-6, gtol=1e-8, max_nfev=max_nfev, method="trf")
-        return sol.x, int(sol.nfev)
+
+def bounded_least_squares(fit, v0, weights=None, max_nfev=25):
+    """Minimise ``fit.residuals`` (optionally times ``weights``) inside ``fit.bounds()`` with
+    its analytic ``fit.jac``, from v0 moved just inside the bounds; (x, evaluations). The one
+    solver of the single- and the multi-shape fit."""
+    from scipy.optimize import least_squares
+
+    lo, hi = fit.bounds()
+    v0 = np.clip(v0, lo + 1e-12, hi - 1e-12)
+    if weights is None:
+        fun, jac = fit.residuals, fit.jac
+    else:
+        fun = lambda v: weights * fit.residuals(v)  # noqa: E731
+        jac = lambda v: weights[:, None] * fit.jac(v)  # noqa: E731
+    # the residuals are distances of ~1e-3 of the length: 1e-6 relative is plenty
+    sol = least_squares(fun, v0, jac=jac, bounds=(lo, hi), x_scale="jac", xtol=1e-7,
+                        ftol=1e-6, gtol=1e-8, max_nfev=max_nfev, method="trf")
+    return sol.x, int(sol.nfev)
 
 
 def _units_from(sides, L, hL, t, w, b_over_L) -> list:

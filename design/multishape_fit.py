@@ -9,7 +9,7 @@ import numpy as np
 
 # Private helpers of the single-target design, used as they are (one mechanism for each job):
 # the vectorised map model, the fit's residual count and edge margin, batch resampling.
-from snapmorph.design.curve_fit import EDGE, N_FIT, Limits, resample_batch
+from snapmorph.design.curve_fit import EDGE, N_FIT, Limits, bounded_least_squares, resample_batch
 from snapmorph.design.map_model import FastModel
 from snapmorph.design.nearest import (_mask_to_pattern, _pattern_to_mask, _reference,
                                       branch_and_bound, matched_costs, pattern_table)
@@ -167,18 +167,7 @@ class _JointFit:
         return np.vstack(blocks)
 
     def solve(self, v0, weights=None, max_nfev=25):
-        from scipy.optimize import least_squares
-
-        lo, hi = self.bounds()
-        v0 = np.clip(v0, lo + 1e-12, hi - 1e-12)
-        if weights is None:
-            fun, jac = self.residuals, self.jac
-        else:
-            fun = lambda v: weights * self.residuals(v)  # noqa: E731
-            jac = lambda v: weights[:, None] * self.jac(v)  # noqa: E731
-        sol = least_squares(fun, v0, jac=jac, bounds=(lo, hi), x_scale="jac", xtol=1e-7,
-                            ftol=1e-6, gtol=1e-8, max_nfev=max_nfev, method="trf")
-        return sol.x, int(sol.nfev)
+        return bounded_least_squares(self, v0, weights, max_nfev)
 
     def solve_minimax(self, v0, tol):
         """Least squares, then up to three Lawson re-weightings towards the largest distance
