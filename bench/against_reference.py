@@ -55,14 +55,14 @@ IMPORTS = {
 
 
 def map_points(n=20):
-    """n points (h/L, t/L, w/L, b/L, resolution) spread evenly over the default map grid, at
-    its own resolution."""
+    """n points (h/L, t/L, w/L, b/L, resolution) spread evenly over the default map grid's
+    points at b/L = 0 (the grid both trees' maps share), at its own resolution."""
     from snapmorph.pipeline.kinds.unit import preset
 
     grid = preset("default")
-    pts = grid.points()
+    pts = [p for p in grid.points() if float(p[3]) == 0.0]
     step = max(len(pts) // n, 1)
-    return [(*map(float, p), float(grid.b_over_L), grid.resolution) for p in pts[::step][:n]]
+    return [(*map(float, p), grid.resolution) for p in pts[::step][:n]]
 
 
 def reference_tree(commit: str) -> Path:

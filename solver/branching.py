@@ -336,8 +336,13 @@ class BranchMonitor:
     # singular direction alone (they are combined on a plane that cuts it).
     def _factor(self, q):
         """Assemble and factorise K at q; returns the number of negative eigenvalues of K
-        under force control, or None when a pivot is exactly zero (or not finite)."""
-        self.system.evaluate(q)
+        under force control, or None when a pivot is exactly zero (or not finite), or when
+        q is degenerate (a trial state of a switch with an edge of zero length: the kernels'
+        division by zero is a failed trial, not a failed path)."""
+        try:
+            self.system.evaluate(q)
+        except (ZeroDivisionError, FloatingPointError):
+            return None
         return self._factor_assembled()
 
     def _factor_assembled(self):

@@ -89,14 +89,24 @@ class ConstrainedStructure:
     # ------------------------------------------------------------------ nodes
     @property
     def n_nodes(self) -> int:
-        return int(sum(len(p) for p in self._positions))
+        # asked hundreds of times per push: counted again only when a rod was added
+        memo = getattr(self, "_n_nodes_memo", None)
+        if memo is None or memo[0] != len(self._positions):
+            memo = self._n_nodes_memo = (len(self._positions),
+                                         int(sum(len(p) for p in self._positions)))
+        return memo[1]
 
     @property
     def reference_positions(self) -> np.ndarray:
         """(n_nodes, dim) stress-free node positions, m."""
-        if not self._positions:
-            return np.zeros((0, self.dim))
-        return np.concatenate(self._positions, axis=0)
+        # read-only, joined again only when a rod was added (asked at every state check)
+        memo = getattr(self, "_reference_memo", None)
+        if memo is None or memo[0] != len(self._positions):
+            X = np.concatenate(self._positions, axis=0) if self._positions \
+                else np.zeros((0, self.dim))
+            X.setflags(write=False)
+            memo = self._reference_memo = (len(self._positions), X)
+        return memo[1]
 
     def check_node(self, node, name="node") -> int:
         """``node`` as a valid int node index, or a ValueError naming the parameter."""
@@ -288,12 +298,19 @@ class ConstrainedStructure:
         """Further held components of internal nodes (none here)."""
 
     def supernodes(self):
-        """Node -> representative of the group of nodes that share displacements."""
-        uf = UnionFind(self._n_total)
-        for a, b in self._merges:
-            uf.union(a, b)
-        self._share_extra(uf)
-        return np.array([uf.find(i) for i in range(self._n_total)], dtype=np.int64)
+        """Node -> representative of the group of nodes that share displacements (read-only;
+        built again only when nodes, ties or clamps were added: the lists only grow)."""
+        key = (self._n_total, len(self._merges), len(getattr(self, "_clamps", ())))
+        memo = getattr(self, "_supernodes_memo", None)
+        if memo is None or memo[0] != key:
+            uf = UnionFind(self._n_total)
+            for a, b in self._merges:
+                uf.union(a, b)
+            self._share_extra(uf)
+            rep = np.array([uf.find(i) for i in range(self._n_total)], dtype=np.int64)
+            rep.setflags(write=False)
+            memo = self._supernodes_memo = (key, rep)
+        return memo[1]
 
     def fixed_components(self, rep=None):
         """(n_nodes, dim) bool: component held by a support (shared across merged nodes);

@@ -47,6 +47,7 @@ def follow_mgdc(
     switch_size=0.5,
     max_switches=8,
     time_limit=None,
+    tol_disp=None,
 ):
     """Load-controlled path with MGDC until the node's displacement reaches
     ``control.distance``.
@@ -58,12 +59,18 @@ def follow_mgdc(
     ``stop(path_arrays)`` may end the path early.
     ``critical``, ``branch``, ``switch_size``, ``max_switches``, ``time_limit``,
     ``max_steps``: as for `follow_displacement` (critical points and branch switching).
+    ``tol_disp``: the correctors stop when a correction is below it (relative to the
+    structure's size; None: `solver.newton.TOL_DISP`) or the residual below ``tol``; a
+    looser one saves the last iteration of most steps where the path's samples need not be
+    exact (metrics solved again at their own states).
     """
     t0 = time.perf_counter()
     o = driver_options(steps, tol, max_iter, max_steps, min_step_ratio, max_step,
                        switch_size, max_switches, time_limit, branch)
     o.update(check_options(max_accept_iter=(max_accept_iter, "int", 1, 10**4, ""),
-                           target_iterations=(target_iterations, "int", 1, 10**4, "")))
+                           target_iterations=(target_iterations, "int", 1, 10**4, ""),
+                           tol_disp=(TOL_DISP if tol_disp is None else tol_disp, "pos", 0.0,
+                                     1e-2, "(relative to the structure's size)")))
     return _Mgdc(structure, control, o, stop, branch, critical, t0).run()
 
 
@@ -77,7 +84,7 @@ class _Mgdc:
         self.system, self.fu = system, fu
         length, fscale = structure.scales()
         self.fscale = fscale = fscale / fu  # forces below are in the system's units (N / fu)
-        self.length, self.tol_disp = length, TOL_DISP * length
+        self.length, self.tol_disp = length, o["tol_disp"] * length
         # the load factor lam is the force in units of `unit` N (see `load_unit`)
         self.unit = load_unit(fscale)
         self.unit_N = self.unit * fu  # N per unit of lam (what the control's targets need)

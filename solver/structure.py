@@ -482,17 +482,24 @@ class Structure(ConstrainedStructure):
         if self.n_nodes == 0:
             raise ValueError("the structure has no rods")
         elements = self.elements()
-        ordering = self._ordering(extra_fixed, elements)
+        ordering, layout = self._ordering(extra_fixed, elements)
         force_unit = self.E_max / E_REF if normalized else 1.0
         loads = self._system_loads(force_unit) if dead_loads else None
-        system = ReducedSystem(self.elements(normalized), *ordering, loads=loads)
+        system = ReducedSystem(self.elements(normalized), *ordering, loads=loads,
+                               layout=layout)
+        if layout[1] is None:  # the first system of this ordering: keep its layout
+            for a in (*system.dofs, system.heights):
+                a.setflags(write=False)  # shared by every system of this ordering
+            layout[:] = [system.dofs, system.heights]
         system.force_unit = force_unit
         return system
 
     def _ordering(self, extra_fixed, elements):
-        """(dof_map, n_reduced, bandwidth) of `reduced_system`, built once per set of held
-        components: a unit's pushes, probes and state checks reuse it (the key holds the
-        supports, the extra held components and the element tables it was built from)."""
+        """((dof_map, n_reduced, bandwidth), layout) of `reduced_system`, built once per set
+        of held components: a unit's pushes, probes and state checks reuse it (the key holds
+        the supports, the extra held components and the element tables it was built from).
+        ``layout``: [element DOFs, envelope heights] of the systems built from it, filled by
+        the first (a list: [None, None] until then)."""
         key = (tuple(sorted((int(n), tuple(sorted(c))) for n, c in self._fixed.items())),
                tuple((int(n), int(c)) for n, c in (extra_fixed or ())),
                len(self._merges), len(self._rigid_groups))
@@ -500,7 +507,7 @@ class Structure(ConstrainedStructure):
         if memo is None or memo[0] is not self._cache:  # built from other elements
             memo = self._orderings = (self._cache, {})
         if key not in memo[1]:
-            memo[1][key] = self._build_ordering(extra_fixed, elements)
+            memo[1][key] = (self._build_ordering(extra_fixed, elements), [None, None])
         return memo[1][key]
 
     def _build_ordering(self, extra_fixed, elements):

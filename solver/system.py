@@ -48,7 +48,7 @@ class BandedSystem:
     None."""
 
     def __init__(self, dof_map, n_reduced, bandwidth, element_dofs, dof_scale=None, order="C",
-                 loads=None):
+                 loads=None, heights=None):
         self.dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
         # the dead-load record of `solver.assembly.assemble_dead_loads` (empty: none)
         self.loads = no_loads() if loads is None else load_record(*loads, self.dof_map)
@@ -67,7 +67,9 @@ class BandedSystem:
         self._band_copy = np.empty_like(self.band)
         # the factor's envelope (fill included): assembly clears, the factor and the solves
         # walk only that part of the band (the rest stays zero; no scans per solve)
-        self.heights = envelope_heights(self.band.shape[1], *element_dofs)
+        # (``heights``: the same, computed before for these element DOFs)
+        self.heights = envelope_heights(self.band.shape[1], *element_dofs) \
+            if heights is None else heights
         # the one choice of factorisation ("banded" or "sparse"); the sparse pattern and its
         # analysis are built at the first sparse factor()
         self.factorisation = system_factorisation(self.n, self.heights, *element_dofs)
@@ -268,11 +270,15 @@ class ReducedSystem(BandedSystem):
     """The system of planar rods: ``elements`` of `solver.assembly`, ``dof_map``
     (2 n_nodes + 2 n_ghosts,) full -> reduced DOF, ``loads`` dead loads (`BandedSystem`)."""
 
-    def __init__(self, elements, dof_map, n_reduced, bandwidth, loads=None):
+    def __init__(self, elements, dof_map, n_reduced, bandwidth, loads=None, layout=None):
+        """``layout``: (element DOFs, envelope heights) of these elements and ``dof_map``
+        when already known (`Structure.reduced_system` keeps them with the DOF ordering)."""
         dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
         self.elements = elements
-        self.dofs = element_dofs(elements, dof_map)
-        super().__init__(dof_map, n_reduced, bandwidth, self.dofs, loads=loads)
+        self.dofs, heights = (element_dofs(elements, dof_map), None) \
+            if layout is None or layout[0] is None else layout
+        super().__init__(dof_map, n_reduced, bandwidth, self.dofs, loads=loads,
+                         heights=heights)
         # the fused kernels, and their arguments after (q, lam, P[, uP1]) but the last
         self._newton_iteration, self._mgdc_iteration = newton_iteration, mgdc_iteration
         self._kernel_args = (self.elements, self.dofs, self.loads, self.dof_map, self.band,

@@ -7,6 +7,8 @@ by `solver.unit`; this module by `solver.unit_model`).
 
 from __future__ import annotations
 
+import functools
+
 import math
 from dataclasses import dataclass
 
@@ -248,6 +250,18 @@ class UnitModel:
     base_mid: int
 
 
+@functools.lru_cache(maxsize=32)
+def _arch_arc_table(g: UnitGeometry):
+    """(x, s): 4001 abscissae from the arch's foot to the apex (m) and the arc length along
+    the arch to each (m), read-only — kept per geometry: a unit is meshed three times (the
+    push, the self-standing check, the snap-back) from the same table."""
+    xs = np.linspace(g.flat_length, 0.5 * g.L, 4001)
+    s = cumulative_length(xs, g.arch_z(xs))
+    xs.setflags(write=False)
+    s.setflags(write=False)
+    return xs, s
+
+
 def _half_sinusoid_x(g: UnitGeometry, spacing, start_x, joint_half):
     """x of the arch nodes from ``start_x`` (just past the flat region) towards the apex at
     L/2, near-uniform in arc length, with one edge centred on the end of the joint (arc length
@@ -258,9 +272,7 @@ def _half_sinusoid_x(g: UnitGeometry, spacing, start_x, joint_half):
 
     Returns (x, s_rigid): node abscissae, and the arc length from the apex within which
     nodes belong to the rigid joint."""
-    x0, xm = g.flat_length, 0.5 * g.L
-    xs = np.linspace(x0, xm, 4001)
-    s = cumulative_length(xs, g.arch_z(xs))
+    xs, s = _arch_arc_table(g)
     total = s[-1]
     s_start = float(np.interp(start_x, xs, s))
     if joint_half <= 0.0:
@@ -365,8 +377,7 @@ def build_unit(
     apex = int(arch.nodes[apex_local])
     # the joint: arch nodes up to the far end of the edges straddling its ends (and at
     # least the apex's two neighbours)
-    xs = np.linspace(g.flat_length, 0.5 * L, 4001)
-    s_half = cumulative_length(xs, g.arch_z(xs))
+    xs, s_half = _arch_arc_table(g)
     arc_from_apex = s_half[-1] - np.interp(np.minimum(arch_x, L - arch_x), xs, s_half)
     in_joint = (arch_x > g.flat_length) & (arc_from_apex <= s_rigid * (1 + 1e-9) + 1e-15)
     if g.joint_length > 0:

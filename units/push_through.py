@@ -180,7 +180,7 @@ def refine_peak(probe, d, F, Q, i, failures, tol=2e-3):
     fails (one of ``failures``) or there is no probe. ``tol``: the search stops when the
     bracket is below this fraction of the samples' spacing (F is flat at its maximum: an
     error e in d costs ~ F'' e^2 / 2 in F_cr)."""
-    if probe is not None and d[i - 1] < d[i] < d[i + 1]:
+    if probe is not None and 0 < i < len(d) - 1 and d[i - 1] < d[i] < d[i + 1]:
         from snapmorph.solver.states import refine_maximum
 
         try:

@@ -89,3 +89,29 @@ def test_the_3d_unit_factorises_a_small_envelope():
     h = (np.maximum.accumulate(reach) - np.arange(n)).astype(float)
     assert 0.5 * float(h @ h) < 0.25 * 0.5 * n * bw * bw
     assert bw < 120
+
+
+def test_cached_layout_follows_the_structure():
+    """Node counts, supernodes, reference positions and the systems' element layout are kept
+    between calls; they follow every rod, tie or support added afterwards."""
+    import numpy as np
+
+    from snapmorph.solver.structure import Structure
+
+    st = Structure()
+    st.add_rod(np.stack([np.linspace(0, 1, 5), np.zeros(5)], 1), E=1e9, width=0.01,
+               thickness=0.001)
+    st.fix(0, "xz")
+    a = st.reduced_system()
+    assert st.n_nodes == 5 and st.reference_positions.shape == (5, 2)
+    assert not st.reference_positions.flags.writeable and not st.supernodes().flags.writeable
+    b = st.reduced_system()
+    assert b.dofs[0] is a.dofs[0] and b.heights is a.heights  # the layout reused
+    st.add_rod(np.stack([np.linspace(0, 1, 3), np.full(3, 0.1)], 1), E=1e9, width=0.01,
+               thickness=0.001)
+    assert st.n_nodes == 8 and st.reference_positions.shape == (8, 2)
+    st.tie(4, 7)
+    rep = st.supernodes()
+    assert rep[4] == rep[7] and len(rep) == 8
+    c = st.reduced_system()
+    assert c.n == 2 * 8 - 2 - 2 and c.dofs[0] is not a.dofs[0]
