@@ -42,8 +42,8 @@ def test_each_footprint_is_a_kind_with_its_sides(footprint):
 
 @pytest.mark.parametrize("footprint", KINDS)
 def test_committed_small_map_is_up_to_date(footprint):
-    """After a change to the 2-D unit, its solver or this kind, rebuild the maps with the
-    commands of docs/sheets.md ("Maps of the polygon units") and commit them."""
+    """After a change to the 2-D unit, its solver or this kind, rebuild the maps
+    (`make maps-polygons MAPS_FLAGS=--force`, docs/sheets.md) and commit them."""
     kind, _ = KINDS[footprint]
     path = _committed(footprint)
     recorded = read_map_identity(path)
