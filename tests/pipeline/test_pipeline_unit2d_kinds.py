@@ -83,6 +83,7 @@ def test_committed_small_map_describes_itself_and_its_statuses_are_sensible(foot
     assert np.all(np.isnan(ds.theta_released.values[~standing_ok]))
 
 
+@pytest.mark.slow
 def test_a_fresh_build_reproduces_the_committed_triangle_points(tmp_path):
     """The triangle's `ci` grid (points of its small map, same options) built through the
     pipeline equals the committed small map there, bit for bit, statuses included."""
