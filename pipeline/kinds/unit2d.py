@@ -147,7 +147,8 @@ def unit2d_spec(sides: int) -> SolverSpec:
                       }[sides]
     each = f"the {sides}" if sides != 4 else "the four"
     names = ", ".join(side_names(sides))
-    arches = "two crossing arches" if sides == 4 else f"arches from the {sides} side midpoints to one apex"
+    arches = ("two crossing arches" if sides == 4
+              else f"arches from the {sides} side midpoints to one apex")
     return SolverSpec(
         name=name,
         solve=solve,
