@@ -7,7 +7,7 @@ JOBS   ?=
 MAPS_FLAGS ?=
 
 .DEFAULT_GOAL := help
-.PHONY: help venv test test-fast test-durations bench maps maps-ci maps-accuracy check-maps figures fuzz test-nojit clean
+.PHONY: help venv test test-fast test-durations bench maps maps-ci maps-polygons maps-accuracy check-maps figures fuzz test-nojit clean
 
 help:  ## list the targets
 	@echo "snapmorph make targets:"
@@ -40,6 +40,11 @@ maps: $(STAMP)  ## build the default design map into maps/data/ (7452 points, ~6
 
 maps-ci: $(STAMP)  ## build the small CI grid into maps/data/ci.nc (no-op when up to date)
 	$(PY) -m snapmorph maps build --grid ci --out maps/data/ci.nc $(MAPS_FLAGS)
+
+maps-polygons: $(STAMP)  ## build the small maps of the 2-D units on a triangle, square and hexagon into maps/data/unit2d-*-small.nc (~1 min on one core; no-op when up to date)
+	$(PY) -m snapmorph maps build --kind unit2d_triangle --grid small --out maps/data/unit2d-triangle-small.nc $(MAPS_FLAGS)
+	$(PY) -m snapmorph maps build --kind unit2d --grid small --out maps/data/unit2d-square-small.nc $(MAPS_FLAGS)
+	$(PY) -m snapmorph maps build --kind unit2d_hexagon --grid small --out maps/data/unit2d-hexagon-small.nc $(MAPS_FLAGS)
 
 check-maps: $(STAMP)  ## recompute the CI grid and compare it with the committed snapshot
 	$(PY) -m snapmorph maps check --grid ci --against maps/data/ci.nc

@@ -46,6 +46,8 @@ PENDING = unit_status.PENDING
 KNOWN = {
     "unit": "snapmorph.pipeline.kinds.unit:SPEC",
     "unit2d": "snapmorph.pipeline.kinds.unit2d:SPEC",
+    "unit2d_triangle": "snapmorph.pipeline.kinds.unit2d:TRIANGLE",
+    "unit2d_hexagon": "snapmorph.pipeline.kinds.unit2d:HEXAGON",
 }
 _REGISTRY: dict = {}
 

@@ -293,8 +293,8 @@ def _info_other_kind(path, kind) -> int:
     with xr.open_dataset(path, engine="netcdf4") as ds:
         ds = ds.load()
     print(f"map {path} (kind {kind})")
-    for key in ("title", "schema_version", "grid", "model_options", "package_version", "git_commit",
-                "created", "inputs_sha256"):
+    for key in ("title", "schema_version", "grid", "sides", "model_options", "package_version",
+                "git_commit", "created", "inputs_sha256"):
         if key in ds.attrs:
             print(f"  {key}: {ds.attrs[key]}")
     status = ds["status"]
