@@ -69,11 +69,11 @@ class DisplacementProbe:
 
 
 def refine_maximum(probe, d, F, positions, i, tol_d=None):
-    """Maximum of F(d) near path sample ``i`` (a local maximum of F): successive parabolic
-    interpolation on d in [d[i-1], d[i+1]] with displacement-controlled solves, from the
-    three samples (`parabolic_maximum`: F is smooth and concave there, so each solve lands
-    next to the maximum; 2-3 solves where a golden-section search needs 7-8). Returns
-    (F_max, d_max), and leaves the full state at d_max in ``probe.last_state``.
+    """Maximum of F(d) near path sample ``i`` (a local maximum of F): Brent's search on d
+    in [d[i-1], d[i+1]] with displacement-controlled solves, started from the three samples
+    (`bracketed_maximum`: 4-5 solves where a bounded search from the interval alone needs
+    7-8). Returns (F_max, d_max), and leaves the full state at d_max in
+    ``probe.last_state``.
 
     Each solve starts from the path's own states, interpolated to the solve's d by the
     parabola through the three samples (the state is a smooth function of d on the branch,
@@ -102,18 +102,18 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
         states[x] = getattr(probe, "last_state", None)
         return Fx
 
-    x, F_max = parabolic_maximum(f, ds, Fs, tol_d)
+    x, F_max = bracketed_maximum(f, ds, Fs, tol_d)
     if x not in states:  # the maximum is the path's own sample: solved there once
         F_max = f(x)
     probe.last_state = states[x]  # the state at the maximum, for the caller
     return F_max, x
 
 
-#: the most solves `parabolic_maximum` makes (it needs 2-3 on a smooth maximum)
-MAX_PARABOLIC_SOLVES = 40
+#: the most solves `bracketed_maximum` makes (it needs 4-5 on a smooth maximum)
+MAX_BRACKETED_SOLVES = 40
 
 
-def parabolic_maximum(f, x3, F3, tol):
+def bracketed_maximum(f, x3, F3, tol):
     """(x, F(x)) at the maximum of f bracketed by three points x3 (increasing) whose middle
     value F3[1] is not below the others, to about ``tol`` in x: Brent's method from that
     bracket (parabolic steps with golden-section safeguards, `scipy.optimize.brent`), the
@@ -132,7 +132,7 @@ def parabolic_maximum(f, x3, F3, tol):
     else:
         res = scipy.optimize.minimize_scalar(
             neg, bracket=(a, m, b), method="brent",
-            options={"xtol": 0.5 * tol / max(abs(a), abs(b)), "maxiter": MAX_PARABOLIC_SOLVES})
+            options={"xtol": 0.5 * tol / max(abs(a), abs(b)), "maxiter": MAX_BRACKETED_SOLVES})
     return float(res.x), -float(res.fun)
 
 
