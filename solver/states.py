@@ -69,11 +69,10 @@ class DisplacementProbe:
 
 
 def refine_maximum(probe, d, F, positions, i, tol_d=None):
-    """Maximum of F(d) near path sample ``i`` (a local maximum of F): Brent's search on d
-    in [d[i-1], d[i+1]] with displacement-controlled solves, started from the three samples
-    (`bracketed_maximum`: 4-5 solves where a bounded search from the interval alone needs
-    7-8). Returns (F_max, d_max), and leaves the full state at d_max in
-    ``probe.last_state``.
+    """Maximum of F(d) near path sample ``i`` (a local maximum of F): Brent's bounded search
+    (golden section with parabolic steps, `scipy.optimize.minimize_scalar`) on d in
+    [d[i-1], d[i+1]] with displacement-controlled solves. Returns (F_max, d_max), and leaves
+the full state at d_max in ``probe.last_state``.
 
     Each solve starts from the path's own states, interpolated to the solve's d by the
     parabola through the three samples (the state is a smooth function of d on the branch,
@@ -85,7 +84,7 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
     if not a < b:
         raise ConvergenceError("the path is not monotone in d around the maximum")
     tol_d = (b - a) * 1e-4 if tol_d is None else tol_d
-    states = {}
+    cache, states = {}, {}
     ds, Fs = np.asarray(d[i - 1:i + 2], dtype=float), np.asarray(F[i - 1:i + 2], dtype=float)
     # F is smooth on the branch between the samples: a solve that lands further from the
     # samples' line than twice their own variation has jumped to another equilibrium (its
@@ -94,46 +93,23 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
     samples = [np.asarray(positions[j], dtype=float) for j in range(i - 1, i + 2)]
 
     def f(x):
-        Fx = probe.solve(_on_parabola(ds, samples, x), x)[1]
-        if not abs(Fx - float(np.interp(x, ds, Fs))) <= 2.0 * spread:
-            raise ConvergenceError(
-                f"the solve at d = {x:.6g} m left the path's branch (F = {Fx:.6g} N against "
-                f"{float(np.interp(x, ds, Fs)):.6g} N on the path)")
-        states[x] = getattr(probe, "last_state", None)
-        return Fx
+        x = float(x)
+        if x not in cache:
+            Fx = probe.solve(_on_parabola(ds, samples, x), x)[1]
+            if not abs(Fx - float(np.interp(x, ds, Fs))) <= 2.0 * spread:
+                raise ConvergenceError(
+                    f"the solve at d = {x:.6g} m left the path's branch (F = {Fx:.6g} N against "
+                    f"{float(np.interp(x, ds, Fs)):.6g} N on the path)")
+            cache[x] = Fx
+            states[x] = getattr(probe, "last_state", None)
+        return cache[x]
 
-    x, F_max = bracketed_maximum(f, ds, Fs, tol_d)
-    if x not in states:  # the maximum is the path's own sample: solved there once
-        F_max = f(x)
+    res = scipy.optimize.minimize_scalar(lambda x: -f(x), bounds=(a, b), method="bounded",
+                                         options={"xatol": 0.5 * tol_d, "maxiter": 60})
+    x = float(res.x)
+    F_max = f(x)
     probe.last_state = states[x]  # the state at the maximum, for the caller
     return F_max, x
-
-
-#: the most solves `bracketed_maximum` makes (it needs 4-5 on a smooth maximum)
-MAX_BRACKETED_SOLVES = 40
-
-
-def bracketed_maximum(f, x3, F3, tol):
-    """(x, F(x)) at the maximum of f bracketed by three points x3 (increasing) whose middle
-    value F3[1] is not below the others, to about ``tol`` in x: Brent's method from that
-    bracket (parabolic steps with golden-section safeguards, `scipy.optimize.brent`), the
-    three known values given, not solved again (a bounded search from the interval alone
-    starts with two golden-section solves and needs 7-8 where this needs 4-5)."""
-    known = {float(x): float(F) for x, F in zip(x3, F3)}
-
-    def neg(x):
-        x = float(x)
-        return -known[x] if x in known else -f(x)
-
-    a, m, b = (float(v) for v in x3)
-    if not (F3[1] > F3[0] and F3[1] > F3[2]):  # a flat side: Brent needs a strict bracket
-        res = scipy.optimize.minimize_scalar(neg, bounds=(a, b), method="bounded",
-                                             options={"xatol": 0.5 * tol, "maxiter": 60})
-    else:
-        res = scipy.optimize.minimize_scalar(
-            neg, bracket=(a, m, b), method="brent",
-            options={"xtol": 0.5 * tol / max(abs(a), abs(b)), "maxiter": MAX_BRACKETED_SOLVES})
-    return float(res.x), -float(res.fun)
 
 
 def _on_parabola(ds, values, x):
