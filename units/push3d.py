@@ -92,16 +92,19 @@ class RodUnitPush:
     failures = (Exception,)
 
     def __init__(self, st, node, distance, steps=60, critical=False, method="mgdc",
-                 start=None):
+                 start=None, max_steps=None):
         self.st, self.node, self.distance, self.start = st, node, distance, start
+        self.max_steps = max_steps
         self.steps, self.critical, self.method = steps, critical, method
-        self.probe = self.X = self.system = None
+        self.probe = self.X = self.system = self.d0 = None
 
     def push(self, stop):
         mgdc = self.method == "mgdc"
         options = {"target_iterations": MGDC_TARGET_ITERATIONS} if mgdc else {}
         if self.start is not None:
             options["start"] = self.start
+        if self.max_steps is not None:
+            options["max_steps"] = self.max_steps
         rule = stop
 
         def stop(rows):  # MGDC's force-control counts classify the crossings
@@ -116,6 +119,10 @@ class RodUnitPush:
                 raise
             raise PushFailed(f"not converged: {name}: {exc}") from exc
         self.X = np.asarray(path.positions[0])
+        # the path's d counts from the stress-free state (a push from ``start`` begins at
+        # the start's displacement): `displacement` measures on the same scale, so that the
+        # states found on the path lie inside its samples' brackets
+        self.d0 = float(np.asarray(path.displacement)[0]) if self.start is not None else None
         self.probe = _probe(self.st, self.node)
         return path
 
@@ -131,7 +138,8 @@ class RodUnitPush:
         return self.st.positions_of(q)
 
     def displacement(self, positions) -> float:
-        return float(self.X[self.node, 2] - positions[self.node, 2])
+        d = float(self.X[self.node, 2] - positions[self.node, 2])
+        return d if self.d0 is None else d + self.d0
 
     def solve_unloaded(self, q):
         pos, info = self.st.solve_equilibrium(q, node=None)
@@ -147,14 +155,17 @@ class RodUnitPush:
 
 
 def push_through(st, node, distance, steps=60, critical=False, method="mgdc",
-                 start=None) -> PushOutcome:
+                 start=None, max_steps=None) -> PushOutcome:
     """Push ``node`` of ``st`` down (-z) by up to ``distance`` (m) until the force has
     crossed zero twice; F_cr, the d's and the states (i)-(iii), and whether (iii) is stable
     with the actuator unloaded (`units.push_through`; else bistable is False and status
     "second state unstable: ..."). ``start``: the equilibrium the push starts from (a full
-    state; None: stress free), d measured from it."""
+    state; None: stress free); d counts from the stress-free state (the path's d, which
+    begins at the start's displacement). ``max_steps``: the path's step cap
+    (None: the driver's own; a deterministic bound where a path may wander)."""
     return experiment.push_through(
-        RodUnitPush(st, node, distance, steps, critical, method, start=start), RULES)
+        RodUnitPush(st, node, distance, steps, critical, method, start=start,
+                    max_steps=max_steps), RULES)
 
 
 # ---------------------------------------------------------------------------------------------
