@@ -278,12 +278,13 @@ def descend(st, q, tol=1e-9, max_iter=400):
     return q
 
 
-def relax_released(st, q):
+def relax_released(st, q, max_iter=400):
     """The stable equilibrium of ``st`` (a structure whose supports remove only its
     rigid-body motion) under no load next to the state ``q``: Newton from ``q``; when that
     equilibrium is unstable (or Newton fails), a descent of the energy (`descend`) from it,
     pushed a little (1 % of the size) along a mode of negative curvature, finished by
-    Newton.
+    Newton. ``max_iter``: the descent's iteration cap (a sheet's soft global modes need
+    more than a unit's: a 3 x 3 sheet's descent was seen to take 428 steady iterations).
 
     Returns (full state or None, negative eigenvalues of its tangent stiffness (None:
     singular or not found), largest node displacement from ``q`` (m), "" or why there is no
@@ -309,7 +310,7 @@ def relax_released(st, q):
                 system.increment(probe, v, 1.0)
                 amp = float(np.max(np.abs(st.positions_of(probe) - st.positions_of(qr))))
                 system.increment(start, v, 1e-2 * length / max(amp, 1e-300))
-            qd = descend(st, start)
+            qd = descend(st, start, max_iter=max_iter)
             _, info = st.solve_equilibrium(qd, node=None)
             qr = np.array(info["state"])
             neg = _negative_eigenvalues(system, qr)

@@ -49,6 +49,10 @@ DEFAULT_NODES_SHEET = 21
 #: branches for thousands of steps (470 s on a 3 x 3 sheet) without reaching a state
 #: (iii). A count, not a time: the same inputs give the same bits.
 PUSH_MAX_STEPS = 300
+#: the iteration cap of a release's energy descent (`relax_released`; a unit's is 400): a
+#: free sheet's soft global modes make it long and steady (428 iterations seen on a 3 x 3
+#: sheet, where 400 reported a failed release)
+RELEASE_MAX_ITER = 4000
 NAN = float("nan")
 
 
@@ -218,7 +222,7 @@ def _step(sheet, boundary, released, cell, q, steps):
         pushed = path_states(st, out.path)[-1]
     if pushed is None:
         pushed = q
-    qr, neg, moved, why, first = relax_released(released, pushed)
+    qr, neg, moved, why, first = relax_released(released, pushed, RELEASE_MAX_ITER)
     if qr is None:
         qr = np.asarray(pushed, dtype=float)
     pos = np.array(released.positions_of(qr))
