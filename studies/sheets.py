@@ -5,7 +5,8 @@ orders of one set of cells).
     .venv/bin/python -m studies.sheets polygons [sides,...]      # h/L scans, F_cr at 21/41/81
     .venv/bin/python -m studies.sheets convergence [nodes,...]   # 3 x 3, order 4,0,8
     .venv/bin/python -m studies.sheets memory [square|hexagon] [orders] [nodes] [cells]
-                     [shape RxC] [out.json] [figure.png]     # e.g. hexagon 20 21 1,2,3,4,5 2x3
+                     [shape RxC] [out.json] [figure.png] ["o1;o2" orders first]
+                     # e.g. hexagon 20 21 1,2,3,4,5 2x3 hex.json hex.png 1,2,3,4,5
     .venv/bin/python -m studies.sheets coupling [order] [nodes]  # fast prediction vs sheet
 """
 
@@ -95,8 +96,17 @@ def memory(tiling="square", n_orders=20, nodes=21, cells=(0, 2, 4, 6, 8), shape=
     cells = list(cells)
     t0 = time.perf_counter()
 
+    from snapmorph.units.sheet import shape_distance
+
+    seen = []
+
     def progress(i, order, r):
-        print(f"  order {i} {order}: {r.solve_time:.0f} s new, per step "
+        # the distance to every earlier final, so that a log cut short still groups them
+        d = [shape_distance(p, r.final.positions) for p in seen]
+        seen.append(r.final.positions)
+        near = (f"; nearest earlier final: order {int(np.argmin(d))} at {1e3 * min(d):.3f} mm"
+                if d else "")
+        print(f"  order {i} {order}: {r.solve_time:.0f} s new{near}, per step "
               f"{[round(s.seconds) for s in r.steps]} s; snapped "
               f"{np.flatnonzero(r.final.snapped).tolist()} stable {r.final.stable} global "
               f"modes {[int(s.global_mode) for s in r.steps]} "
@@ -190,7 +200,7 @@ def _memory_figure(sheet, res, path):
     pairs = [grps for grps in same.values() if len(grps) > 1]
     d = res["distances"]
     if pairs:
-        picks = [grps[0]["orders"][0] for grps in pairs[0][:2]]
+        picks = [grp["orders"][0] for grp in pairs[0][:2]]
         what = "same snapped cells, different shapes"
     else:  # no memory: the first order and those farthest from it
         far = np.argsort(-d[0])
@@ -242,10 +252,11 @@ if __name__ == "__main__":
         convergence(tuple(int(s) for s in sys.argv[2].split(",")) if len(sys.argv) > 2
                     else (21, 31, 41))
     elif what == "memory":
-        a = sys.argv[2:] + [""] * 7
+        a = sys.argv[2:] + [""] * 8
         memory(a[0] or "square", int(a[1] or 20), int(a[2] or 21),
                tuple(int(c) for c in (a[3] or "0,2,4,6,8").split(",")),
-               tuple(int(c) for c in (a[4] or "3x3").split("x")), a[5], a[6])
+               tuple(int(c) for c in (a[4] or "3x3").split("x")), a[5], a[6],
+               [tuple(int(c) for c in o.split(",")) for o in (a[7] or "0,4,8,2,6").split(";")])
     elif what == "coupling":
         coupling(tuple(int(c) for c in sys.argv[2].split(",")) if len(sys.argv) > 2
                  else (4, 0, 8), int(sys.argv[3]) if len(sys.argv) > 3 else 21)
