@@ -37,18 +37,20 @@ def run(shape, order):
     from snapmorph.units.sheet import build_sheet, sheet_structure, simulate_sheet
 
     g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     sheet = build_sheet(g, "square", shape)
     system = sheet_structure(sheet).reduced_system()
     r = simulate_sheet(sheet, order)
-    total = time.perf_counter() - t0
+    total, cpu = time.perf_counter() - t0, time.process_time() - c0
+    # CPU seconds too: on a shared machine the wall clock counts the other processes' turns
     print(f"sheet {shape[0]}x{shape[1]}: {sheet.mesh.n_nodes} nodes, {system.n} DOFs "
-          f"({system.factorisation}), order {order}: {total:.1f} s", flush=True)
+          f"({system.factorisation}), order {order}: {total:.1f} s wall, {cpu:.1f} s CPU",
+          flush=True)
     for s in r.steps:
         print(f"  cell {s.cell:2d}: {s.seconds:6.1f} s  F_cr {s.F_cr:.3f} N  push {s.push_status[:40]!r}"
               f"  snapped {int(s.snapped.sum())}  stable {s.stable}  global mode {s.global_mode}",
               flush=True)
-    return total
+    return total, cpu
 
 
 def main():
@@ -58,11 +60,13 @@ def main():
 
     warm = build_sheet(UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3), "square", (1, 1))
     simulate_sheet(warm, [0])
-    t = run((3, 3), centre_out(3, 3))
-    print(f"3x3, all nine cells: {t:.1f} s (target <= {TARGET_3X3_S:.0f} s on one core: "
-          f"{'met' if t <= TARGET_3X3_S else 'NOT met'})", flush=True)
+    t, cpu = run((3, 3), centre_out(3, 3))
+    print(f"3x3, all nine cells: {t:.1f} s wall, {cpu:.1f} s CPU (target <= "
+          f"{TARGET_3X3_S:.0f} s on one core: {'met' if cpu <= TARGET_3X3_S else 'NOT met'} "
+          f"by the CPU time)", flush=True)
     n6 = int(os.environ.get("BENCH_SHEET_6X6_CELLS", "4"))
-    run((6, 6), centre_out(6, 6)[:n6])
+    if n6 > 0:
+        run((6, 6), centre_out(6, 6)[:n6])
 
 
 if __name__ == "__main__":

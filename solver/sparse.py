@@ -65,6 +65,28 @@ ENVELOPE_FLOPS_PER_NNZ = 200.0
 # ---------------------------------------------------------------------------- pattern
 
 
+#: the patterns (and entry maps) of the last few DOF lists: a sheet's push builds several
+#: systems of the same structure (rig, release, stability), each of which would otherwise
+#: count, sort and map the same pattern again (~40 ms per system on a 3 x 3 sheet)
+_PATTERNS: dict = {}
+_PATTERNS_KEPT = 8
+
+
+def _cached_pattern(n, dofs):
+    """(indptr, indices, maps) of `csc_pattern` and `entry_map` for the int64 DOF lists
+    ``dofs``, from the cache when the same lists were seen (compared byte for byte); the
+    arrays are shared: nobody writes to them."""
+    key = (int(n),) + tuple((d.shape, d.tobytes()) for d in dofs)
+    hit = _PATTERNS.get(key)
+    if hit is None:
+        indptr, indices = csc_pattern(n, *dofs)
+        hit = (indptr, indices, tuple(entry_map(d, indptr, indices) for d in dofs))
+        if len(_PATTERNS) >= _PATTERNS_KEPT:
+            _PATTERNS.pop(next(iter(_PATTERNS)))
+        _PATTERNS[key] = hit
+    return hit
+
+
 def csc_pattern(n, *element_dofs):
     """(indptr, indices) int64 of the upper triangle (row <= column, rows sorted within each
     column, every diagonal entry present) of an n x n matrix assembled from elements with
@@ -214,8 +236,7 @@ class SparseLDLT:
             raise ValueError(f"n (reduced DOFs) must be >= 1; got {n!r}")
         dofs = tuple(np.ascontiguousarray(d, dtype=np.int64).reshape(len(d), -1 if len(d) else 0)
                      for d in element_dofs)
-        self.indptr, self.indices = csc_pattern(self.n, *dofs)
-        self.maps = tuple(entry_map(d, self.indptr, self.indices) for d in dofs)
+        self.indptr, self.indices, self.maps = _cached_pattern(self.n, dofs)
         self.diagonal = self.indptr[1:] - 1
         # the matrix handed to QDLDL shares ``data``; QDLDL reads only its values on refactor
         self._U = scipy.sparse.csc_matrix(
@@ -379,5 +400,5 @@ def system_factorisation(n, heights, *element_dofs):
     if n < 2 or envelope_flops(heights) <= SPARSE_WITHOUT_ANALYSIS_FLOPS:
         return "banded"
     dofs = [np.ascontiguousarray(d, dtype=np.int64) for d in element_dofs if np.size(d)]
-    nnz = int(csc_pattern(int(n), *dofs)[1].shape[0])
+    nnz = int(_cached_pattern(int(n), dofs)[1].shape[0])
     return choose_factorisation(int(n), heights, nnz)

@@ -5,6 +5,8 @@ orders of one set of cells).
     .venv/bin/python -m studies.sheets polygons [sides,...]      # h/L scans, F_cr at 21/41/81
     .venv/bin/python -m studies.sheets convergence [nodes,...]   # 3 x 3, order 4,0,8
     .venv/bin/python -m studies.sheets memory [square|hexagon] [orders] [nodes] [cells]
+                     [shape RxC] [out.json] [figure.png] ["o1;o2" orders first]
+                     # e.g. hexagon 20 21 1,2,3,4,5 2x3 hex.json hex.png 1,2,3,4,5
     .venv/bin/python -m studies.sheets coupling [order] [nodes]  # fast prediction vs sheet
 """
 
@@ -77,39 +79,142 @@ def convergence(meshes=(21, 31, 41), order=(4, 0, 8)):
               f"edge curvatures {100 * dk:.2f} % of the largest", flush=True)
 
 
-def memory(tiling="square", n_orders=20, nodes=21, cells=(0, 2, 4, 6, 8)):
-    """`explore_orders` on one set of cells of a 3 x 3 sheet (default the 5-cell set 0, 2,
-    4, 6, 8; square or hexagonal)."""
+def memory(tiling="square", n_orders=20, nodes=21, cells=(0, 2, 4, 6, 8), shape=(3, 3),
+           out="", figure="", include=((0, 4, 8, 2, 6),)):
+    """`explore_orders` on one set of ``cells`` of a ``shape`` sheet (square or hexagonal;
+    L 100, h 40, t 0.5, w 5 mm; free): the final shapes grouped by shape distance (L / 100),
+    written to ``out`` (JSON: orders, every final's snapped cells, stability, global modes,
+    apex heights, the distance matrix, the groups) and a figure (``figure``, PNG): two
+    stable shapes with the same snapped cells reached in different orders, or, when there
+    are none, the finals of four orders with their distances in the titles."""
+    import json
+
     from snapmorph.units.sheet import build_sheet, explore_orders
 
     g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
-    sheet = build_sheet(g, tiling, (3, 3), nodes=nodes)
+    sheet = build_sheet(g, tiling, tuple(shape), nodes=nodes)
     cells = list(cells)
     t0 = time.perf_counter()
-    out = explore_orders(sheet, cells, orders=n_orders)
-    print(f"{tiling} 3x3, cells {cells}, {len(out['orders'])} orders, {nodes} nodes: "
-          f"{time.perf_counter() - t0:.0f} s; {len(out['groups'])} final shapes, "
-          f"{out['distinct']} distinct stable", flush=True)
-    for grp in out["groups"]:
-        orders = [out["orders"][i] for i in grp["orders"]]
-        print(f"  shape: snapped {grp['snapped']} stable {grp['stable']} spread "
-              f"{1e3 * grp['spread']:.2f} mm, {len(orders)} orders, e.g. {orders[:3]}")
-    d = out["distances"]
-    print(f"  largest distance between finals {1e3 * d.max():.2f} mm")
-    same = {}
-    for grp in out["groups"]:
-        same.setdefault(tuple(grp["snapped"]), []).append(grp)
-    pairs = [g for g in same.values() if len(g) > 1 and all(x["stable"] for x in g)]
-    if pairs:  # two stable shapes with the same snapped cells: the memory figure
-        from snapmorph.figures_sheet import plot_shapes
 
-        a, b = pairs[0][:2]
-        path = f"sheet_memory_{tiling}.png"
-        plot_shapes(sheet, [(f"order {out['orders'][g['orders'][0]]}", g["positions"],
-                             np.isin(np.arange(sheet.n_cells), g["snapped"]))
-                            for g in (a, b)], path)
-        print(f"  wrote {path}: two shapes with cells {a['snapped']} snapped")
-    return out
+    from snapmorph.units.sheet import shape_distance
+
+    seen = []
+
+    def progress(i, order, r):
+        # the distance to every earlier final, so that a log cut short still groups them
+        d = [shape_distance(p, r.final.positions) for p in seen]
+        seen.append(r.final.positions)
+        near = (f"; nearest earlier final: order {int(np.argmin(d))} at {1e3 * min(d):.3f} mm"
+                if d else "")
+        print(f"  order {i} {order}: {r.solve_time:.0f} s new{near}, per step "
+              f"{[round(s.seconds) for s in r.steps]} s; snapped "
+              f"{np.flatnonzero(r.final.snapped).tolist()} stable {r.final.stable} global "
+              f"modes {[int(s.global_mode) for s in r.steps]} "
+              f"{'; '.join(s.reason for s in r.steps if s.reason)}", flush=True)
+
+    include = [o for o in include if sorted(o) == sorted(cells)]
+    runs = branching_orders(cells, n_orders, include=include)
+    res = explore_orders(sheet, cells, orders=runs, progress=progress)
+    seconds = time.perf_counter() - t0
+    print(f"{tiling} {shape[0]}x{shape[1]}, cells {cells}, {len(res['orders'])} orders, "
+          f"{nodes} nodes: {seconds:.0f} s ({res['pushes']} pushes); {len(res['groups'])} "
+          f"final shapes, {res['distinct']} distinct stable", flush=True)
+    d = res["distances"]
+    for grp in res["groups"]:
+        orders = [res["orders"][i] for i in grp["orders"]]
+        print(f"  shape: snapped {grp['snapped']} stable {grp['stable']} spread "
+              f"{1e3 * grp['spread']:.3f} mm, {len(orders)} orders, e.g. {orders[:3]}")
+    print(f"  largest distance between finals {1e3 * d.max():.3f} mm", flush=True)
+    finals = []
+    for o, r in zip(res["orders"], res["results"]):
+        f = r.final
+        finals.append({"order": o, "snapped": np.flatnonzero(f.snapped).tolist(),
+                       "stable": bool(f.stable), "negative_eigenvalues": f.negative_eigenvalues,
+                       "global_modes": [bool(s.global_mode) for s in r.steps],
+                       "reasons": [s.reason for s in r.steps],
+                       "push_status": [s.push_status for s in r.steps],
+                       "F_cr_N": [float(s.F_cr) for s in r.steps],
+                       "apex_heights_mm": np.round(1e3 * f.apex_heights, 4).tolist()})
+    record = {"tiling": tiling, "shape": list(shape), "nodes": nodes, "cells": cells,
+              "geometry_mm": {"L": 100, "h": 40, "t": 0.5, "w": 5}, "boundary": "free",
+              "tolerance_mm": 1e3 * 0.01 * g.L, "seconds": seconds, "pushes": res["pushes"],
+              "finals": finals, "distances_mm": np.round(1e3 * d, 4).tolist(),
+              "groups": [{"orders": grp["orders"], "snapped": grp["snapped"],
+                          "stable": grp["stable"], "spread_mm": 1e3 * grp["spread"]}
+                         for grp in res["groups"]],
+              "distinct_stable": res["distinct"]}
+    if out:
+        with open(out, "w") as fh:
+            json.dump(record, fh, indent=1)
+        print(f"  wrote {out}")
+    if figure:
+        _memory_figure(sheet, res, figure)
+    return res
+
+
+def branching_orders(cells, n=20, firsts=2, per_pair=5, seed=0, include=()):
+    """``n`` distinct orders of ``cells`` chosen to share prefixes (`explore_orders` pushes
+    a shared prefix once): ``firsts`` different first cells, at most ``per_pair`` orders per
+    first two cells, each next order the one that adds the fewest new pushes (ties broken by
+    a shuffle with ``seed``); the orders ``include`` come first. 20 orders of 5 cells cost
+    ~58 pushes instead of 100."""
+    import itertools
+
+    rng = np.random.default_rng(seed)
+    perms = [list(p) for p in itertools.permutations(cells)]
+    perms = [perms[i] for i in rng.permutation(len(perms))]
+    chosen = [list(o) for o in include]
+    middle = list(cells)[len(cells) // 2]  # e.g. the centre of 0, 2, 4, 6, 8
+    heads = []
+    for c in [o[0] for o in chosen] + [middle] + list(cells):
+        if c not in heads:
+            heads.append(c)
+    heads = heads[:firsts]
+    seen = {tuple(o[: k + 1]) for o in chosen for k in range(len(o))}
+    while len(chosen) < n:
+        best, cost = None, None
+        head = heads[len(chosen) % len(heads)]  # the first cells take turns
+        for p in perms:
+            pair = sum(1 for o in chosen if o[:2] == p[:2])
+            if p in chosen or p[0] != head or pair >= per_pair:
+                continue
+            new = sum(1 for k in range(len(p)) if tuple(p[: k + 1]) not in seen)
+            if cost is None or new < cost:
+                best, cost = p, new
+        if best is None:
+            break
+        chosen.append(best)
+        seen |= {tuple(best[: k + 1]) for k in range(len(best))}
+    return chosen
+
+
+def _memory_figure(sheet, res, path):
+    """Two stable shapes with the same snapped set from different orders; else the finals
+    of the orders farthest apart (four at most), their distances in the titles."""
+    from snapmorph.figures_sheet import plot_shapes
+
+    same = {}
+    for grp in res["groups"]:
+        if grp["stable"]:
+            same.setdefault(tuple(grp["snapped"]), []).append(grp)
+    pairs = [grps for grps in same.values() if len(grps) > 1]
+    d = res["distances"]
+    if pairs:
+        picks = [grp["orders"][0] for grp in pairs[0][:2]]
+        what = "same snapped cells, different shapes"
+    else:  # no memory: the first order and those farthest from it
+        far = np.argsort(-d[0])
+        picks = [0] + [int(i) for i in far if i != 0][:3]
+        what = "one shape"
+    states = []
+    for i in picks:
+        f = res["results"][i].final
+        dist = ", ".join(f"{1e3 * d[i, j]:.2f}" for j in picks if j != i)
+        states.append((f"order {res['orders'][i]}\nsnapped "
+                       f"{np.flatnonzero(f.snapped).tolist()}; to the others {dist} mm",
+                       f.positions, f.snapped))
+    plot_shapes(sheet, states, path)
+    print(f"  wrote {path} ({what})", flush=True)
 
 
 def coupling(order=(4, 0, 8), nodes=21):
@@ -147,11 +252,11 @@ if __name__ == "__main__":
         convergence(tuple(int(s) for s in sys.argv[2].split(",")) if len(sys.argv) > 2
                     else (21, 31, 41))
     elif what == "memory":
-        memory(sys.argv[2] if len(sys.argv) > 2 else "square",
-               int(sys.argv[3]) if len(sys.argv) > 3 else 20,
-               int(sys.argv[4]) if len(sys.argv) > 4 else 21,
-               tuple(int(c) for c in sys.argv[5].split(",")) if len(sys.argv) > 5
-               else (0, 2, 4, 6, 8))
+        a = sys.argv[2:] + [""] * 8
+        memory(a[0] or "square", int(a[1] or 20), int(a[2] or 21),
+               tuple(int(c) for c in (a[3] or "0,2,4,6,8").split(",")),
+               tuple(int(c) for c in (a[4] or "3x3").split("x")), a[5], a[6],
+               [tuple(int(c) for c in o.split(",")) for o in (a[7] or "0,4,8,2,6").split(";")])
     elif what == "coupling":
         coupling(tuple(int(c) for c in sys.argv[2].split(",")) if len(sys.argv) > 2
                  else (4, 0, 8), int(sys.argv[3]) if len(sys.argv) > 3 else 21)

@@ -92,16 +92,19 @@ class RodUnitPush:
     failures = (Exception,)
 
     def __init__(self, st, node, distance, steps=60, critical=False, method="mgdc",
-                 start=None):
+                 start=None, max_steps=None):
         self.st, self.node, self.distance, self.start = st, node, distance, start
+        self.max_steps = max_steps
         self.steps, self.critical, self.method = steps, critical, method
-        self.probe = self.X = self.system = None
+        self.probe = self.X = self.system = self.d0 = None
 
     def push(self, stop):
         mgdc = self.method == "mgdc"
         options = {"target_iterations": MGDC_TARGET_ITERATIONS} if mgdc else {}
         if self.start is not None:
             options["start"] = self.start
+        if self.max_steps is not None:
+            options["max_steps"] = self.max_steps
         rule = stop
 
         def stop(rows):  # MGDC's force-control counts classify the crossings
@@ -116,6 +119,10 @@ class RodUnitPush:
                 raise
             raise PushFailed(f"not converged: {name}: {exc}") from exc
         self.X = np.asarray(path.positions[0])
+        # the path's d counts from the stress-free state (a push from ``start`` begins at
+        # the start's displacement): `displacement` measures on the same scale, so that the
+        # states found on the path lie inside its samples' brackets
+        self.d0 = float(np.asarray(path.displacement)[0]) if self.start is not None else None
         self.probe = _probe(self.st, self.node)
         return path
 
@@ -131,7 +138,8 @@ class RodUnitPush:
         return self.st.positions_of(q)
 
     def displacement(self, positions) -> float:
-        return float(self.X[self.node, 2] - positions[self.node, 2])
+        d = float(self.X[self.node, 2] - positions[self.node, 2])
+        return d if self.d0 is None else d + self.d0
 
     def solve_unloaded(self, q):
         pos, info = self.st.solve_equilibrium(q, node=None)
@@ -147,14 +155,17 @@ class RodUnitPush:
 
 
 def push_through(st, node, distance, steps=60, critical=False, method="mgdc",
-                 start=None) -> PushOutcome:
+                 start=None, max_steps=None) -> PushOutcome:
     """Push ``node`` of ``st`` down (-z) by up to ``distance`` (m) until the force has
     crossed zero twice; F_cr, the d's and the states (i)-(iii), and whether (iii) is stable
     with the actuator unloaded (`units.push_through`; else bistable is False and status
     "second state unstable: ..."). ``start``: the equilibrium the push starts from (a full
-    state; None: stress free), d measured from it."""
+    state; None: stress free); d counts from the stress-free state (the path's d, which
+    begins at the start's displacement). ``max_steps``: the path's step cap
+    (None: the driver's own; a deterministic bound where a path may wander)."""
     return experiment.push_through(
-        RodUnitPush(st, node, distance, steps, critical, method, start=start), RULES)
+        RodUnitPush(st, node, distance, steps, critical, method, start=start,
+                    max_steps=max_steps), RULES)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -267,12 +278,13 @@ def descend(st, q, tol=1e-9, max_iter=400):
     return q
 
 
-def relax_released(st, q):
+def relax_released(st, q, max_iter=400):
     """The stable equilibrium of ``st`` (a structure whose supports remove only its
     rigid-body motion) under no load next to the state ``q``: Newton from ``q``; when that
     equilibrium is unstable (or Newton fails), a descent of the energy (`descend`) from it,
     pushed a little (1 % of the size) along a mode of negative curvature, finished by
-    Newton.
+    Newton. ``max_iter``: the descent's iteration cap (a sheet's soft global modes need
+    more than a unit's: a 3 x 3 sheet's descent was seen to take 428 steady iterations).
 
     Returns (full state or None, negative eigenvalues of its tangent stiffness (None:
     singular or not found), largest node displacement from ``q`` (m), "" or why there is no
@@ -298,7 +310,7 @@ def relax_released(st, q):
                 system.increment(probe, v, 1.0)
                 amp = float(np.max(np.abs(st.positions_of(probe) - st.positions_of(qr))))
                 system.increment(start, v, 1e-2 * length / max(amp, 1e-300))
-            qd = descend(st, start)
+            qd = descend(st, start, max_iter=max_iter)
             _, info = st.solve_equilibrium(qd, node=None)
             qr = np.array(info["state"])
             neg = _negative_eigenvalues(system, qr)

@@ -44,6 +44,15 @@ __all__ = ["BOUNDARIES", "DEFAULT_NODES_SHEET", "SheetStep", "SheetResult", "bui
 BOUNDARIES = ("free", "clamped-edge")
 #: default resolution of a sheet's cells: nodes along a side (the unit's is 41)
 DEFAULT_NODES_SHEET = 21
+#: the step cap of a cell's push (MGDC path steps): a push that snaps takes 50-100 steps
+#: at the default ``steps``; pushes next to snapped cells were seen to wander between
+#: branches for thousands of steps (470 s on a 3 x 3 sheet) without reaching a state
+#: (iii). A count, not a time: the same inputs give the same bits.
+PUSH_MAX_STEPS = 300
+#: the iteration cap of a release's energy descent (`relax_released`; a unit's is 400): a
+#: free sheet's soft global modes make it long and steady (428 iterations seen on a 3 x 3
+#: sheet, where 400 reported a failed release)
+RELEASE_MAX_ITER = 4000
 NAN = float("nan")
 
 
@@ -200,20 +209,27 @@ def _step(sheet, boundary, released, cell, q, steps):
     t0 = time.perf_counter()
     g = sheet.geometry
     st = sheet_structure(sheet, boundary, cell)
-    fresh = not np.any(q - released.initial_state())
-    out = push_through(st, int(sheet.apex[cell]), 3.0 * g.h, steps=int(steps),
-                       start=None if fresh else q)
+    q0 = released.initial_state()
+    fresh = not np.any(q - q0)
+    # the push's distance counts from the stress-free state: 3 h beyond where the apex is
+    # now (an earlier step may have carried it down by more than 3 h: a free sheet curls)
+    z = int(released.node_dofs(int(sheet.apex[cell]))[2])
+    travel = 3.0 * g.h + (0.0 if fresh else float(q0[z] - q[z]))
+    out = push_through(st, int(sheet.apex[cell]), travel, steps=int(steps),
+                       start=None if fresh else q, max_steps=PUSH_MAX_STEPS)
     pushed = out.full_states.get("iii")
     if pushed is None and out.path is not None and len(out.path.positions):
         pushed = path_states(st, out.path)[-1]
     if pushed is None:
         pushed = q
-    qr, neg, moved, why, first = relax_released(released, pushed)
+    qr, neg, moved, why, first = relax_released(released, pushed, RELEASE_MAX_ITER)
     if qr is None:
         qr = np.asarray(pushed, dtype=float)
     pos = np.array(released.positions_of(qr))
     heights = apex_heights(sheet, pos)
     d, F = (np.asarray(a, dtype=float) for a in out.curve)
+    if not fresh and d.size:  # the push's d counts from the stress-free state
+        d = d - d[0]
     return SheetStep(cell, d, F, float(out.F_cr), out.status, heights < 0.0,
                      neg == 0, neg, first is None or first > 0, pos, np.array(qr), heights,
                      moved, why, time.perf_counter() - t0,
@@ -253,15 +269,18 @@ def _orders(cells, orders, seed):
 
 
 def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
-                   tol: float | None = None, seed: int = 0, steps: int = 60) -> dict:
+                   tol: float | None = None, seed: int = 0, steps: int = 60,
+                   progress=None) -> dict:
     """Snap the same set of ``cells`` in many ``orders`` (a list of permutations, or a
     count: that many distinct ones, `_orders`) and group the final states by
     `shape_distance` (two finals are one shape when within ``tol``, default L / 100).
+    ``progress``: None or a callable given (index, order, `SheetResult`) after every order.
 
     Returns {"orders": the orders run, "results": their `SheetResult`s, "groups": [{"orders":
     indices into "orders", "snapped": cells snapped in the shape, "stable": bool,
     "positions": (n, 3) of the first, "spread": largest distance to it (m)}], "distinct":
-    the number of distinct stable shapes, "distances": (n, n) m between the finals}."""
+    the number of distinct stable shapes, "distances": (n, n) m between the finals,
+    "pushes": the pushes run (a prefix several orders share is pushed once)}."""
     cells = check_order(sheet, cells)
     if len(set(cells)) != len(cells):
         raise ValueError(f"cells must be distinct cell indices; got {cells!r}")
@@ -270,7 +289,7 @@ def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
     for o in runs:
         if sorted(o) != sorted(cells):
             raise ValueError(f"every order must be a permutation of cells {cells}; got {o}")
-    results = [simulate_sheet(sheet, o, boundary, steps=steps) for o in runs]
+    results, pushes = _run_orders(sheet, runs, boundary, steps, progress)
     finals = [r.final.positions for r in results]
     n = len(finals)
     dist = np.zeros((n, n))
@@ -290,7 +309,33 @@ def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
                            "spread": 0.0})
     distinct = sum(1 for grp in groups if grp["stable"])
     return {"orders": runs, "results": results, "groups": groups, "distinct": distinct,
-            "distances": dist}
+            "distances": dist, "pushes": pushes}
+
+
+def _run_orders(sheet, runs, boundary, steps, progress=None):
+    """The `SheetResult` of every order of ``runs``, as `simulate_sheet` gives it, with every
+    prefix that several orders share pushed once (a step depends only on the state before
+    it and the cell pushed: the orders' steps are those objects, shared). Returns (results,
+    the number of pushes run); a result's ``solve_time`` counts its own new steps only."""
+    released = sheet_structure(sheet, boundary)
+    q0 = np.array(released.initial_state(), dtype=float)
+    done = {}
+    results = []
+    for order in runs:
+        t0 = time.perf_counter()
+        result = SheetResult(sheet, boundary, list(order))
+        q = q0
+        for k, c in enumerate(order):
+            key = tuple(order[: k + 1])
+            if key not in done:
+                done[key] = _step(sheet, boundary, released, c, q, steps)
+            result.steps.append(done[key])
+            q = done[key].state
+        result.solve_time = time.perf_counter() - t0
+        results.append(result)
+        if progress is not None:
+            progress(len(results) - 1, list(order), result)
+    return results, len(done)
 
 
 # ---------------------------------------------------------------------------- prediction
