@@ -179,16 +179,20 @@ def refine_peak(probe, d, F, Q, i, failures, tol=2e-3):
     displacement control); the vertex of the parabola through three samples when that
     fails (one of ``failures``) or there is no probe. ``tol``: the search stops when the
     bracket is below this fraction of the samples' spacing (F is flat at its maximum: an
-    error e in d costs ~ F'' e^2 / 2 in F_cr)."""
+    error e in d costs ~ F'' e^2 / 2 in F_cr). A search whose best solve stays below the
+    sample itself (the sample lies at the maximum, closer than the search's tolerance)
+    returns the sample: an equilibrium of the path, not the parabola's vertex (which between
+    coarse samples can overshoot the maximum by 1e-4 of F_cr)."""
     if probe is not None and 0 < i < len(d) - 1 and d[i - 1] < d[i] < d[i + 1]:
         from snapmorph.solver.states import refine_maximum
 
         try:
             F_max, d_max = refine_maximum(probe, d, F, Q, i, tol_d=tol * (d[i + 1] - d[i - 1]))
-            if F_max >= F[i]:
-                return float(F_max), float(d_max), True
         except failures:
-            pass
+            return (*parabola_peak(d, F, i), False)
+        if F_max >= F[i]:
+            return float(F_max), float(d_max), True
+        return float(F[i]), float(d[i]), False
     return (*parabola_peak(d, F, i), False)
 
 
