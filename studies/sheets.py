@@ -118,12 +118,15 @@ def memory(tiling="square", n_orders=20, nodes=21, cells=(0, 2, 4, 6, 8), shape=
     seconds = time.perf_counter() - t0
     print(f"{tiling} {shape[0]}x{shape[1]}, cells {cells}, {len(res['orders'])} orders, "
           f"{nodes} nodes: {seconds:.0f} s ({res['pushes']} pushes); {len(res['groups'])} "
-          f"final shapes, {res['distinct']} distinct stable", flush=True)
+          f"final shapes, {res['distinct']} distinct stable, {res['distinct_complete']} of them "
+          f"reached by an order whose every push answered and every release was stable",
+          flush=True)
     d = res["distances"]
     for grp in res["groups"]:
         orders = [res["orders"][i] for i in grp["orders"]]
         print(f"  shape: snapped {grp['snapped']} stable {grp['stable']} spread "
-              f"{1e3 * grp['spread']:.3f} mm, {len(orders)} orders, e.g. {orders[:3]}")
+              f"{1e3 * grp['spread']:.3f} mm, {len(orders)} orders ({len(grp['complete'])} "
+              f"complete), e.g. {orders[:3]}")
     print(f"  largest distance between finals {1e3 * d.max():.3f} mm", flush=True)
     finals = []
     for o, r in zip(res["orders"], res["results"]):
@@ -133,6 +136,7 @@ def memory(tiling="square", n_orders=20, nodes=21, cells=(0, 2, 4, 6, 8), shape=
                        "global_modes": [bool(s.global_mode) for s in r.steps],
                        "reasons": [s.reason for s in r.steps],
                        "push_status": [s.push_status for s in r.steps],
+                       "complete": r.complete,
                        "F_cr_N": [float(s.F_cr) for s in r.steps],
                        "apex_heights_mm": np.round(1e3 * f.apex_heights, 4).tolist()})
     record = {"tiling": tiling, "shape": list(shape), "nodes": nodes, "cells": cells,
@@ -140,9 +144,11 @@ def memory(tiling="square", n_orders=20, nodes=21, cells=(0, 2, 4, 6, 8), shape=
               "tolerance_mm": 1e3 * 0.01 * g.L, "seconds": seconds, "pushes": res["pushes"],
               "finals": finals, "distances_mm": np.round(1e3 * d, 4).tolist(),
               "groups": [{"orders": grp["orders"], "snapped": grp["snapped"],
-                          "stable": grp["stable"], "spread_mm": 1e3 * grp["spread"]}
+                          "stable": grp["stable"], "spread_mm": 1e3 * grp["spread"],
+                          "complete": grp["complete"]}
                          for grp in res["groups"]],
-              "distinct_stable": res["distinct"]}
+              "distinct_stable": res["distinct"],
+              "distinct_stable_complete": res["distinct_complete"]}
     if out:
         with open(out, "w") as fh:
             json.dump(record, fh, indent=1)
@@ -195,12 +201,12 @@ def _memory_figure(sheet, res, path):
 
     same = {}
     for grp in res["groups"]:
-        if grp["stable"]:
+        if grp["stable"] and grp["complete"]:  # a shape let go of mid-push is no result
             same.setdefault(tuple(grp["snapped"]), []).append(grp)
     pairs = [grps for grps in same.values() if len(grps) > 1]
     d = res["distances"]
     if pairs:
-        picks = [grp["orders"][0] for grp in pairs[0][:2]]
+        picks = [grp["complete"][0] for grp in pairs[0][:2]]
         what = "same snapped cells, different shapes"
     else:  # no memory: the first order and those farthest from it
         far = np.argsort(-d[0])

@@ -34,6 +34,7 @@ import numpy as np
 
 from snapmorph.units.frame3d import PETG_NU, UnitGeometry
 from snapmorph.units.push3d import path_states, push_through, relax_released
+from snapmorph.units.status import answered
 from snapmorph.units.sheet_mesh import TILINGS, SheetModel, build_sheet_mesh, check_cells
 
 __all__ = ["BOUNDARIES", "DEFAULT_NODES_SHEET", "SheetStep", "SheetResult", "build_sheet",
@@ -149,6 +150,14 @@ class SheetStep:
                 f"global_mode={self.global_mode})")
 
 
+    @property
+    def complete(self) -> bool:
+        """Did the push answer (ok, monostable, second state unstable: `units.status`) and
+        the release find a stable equilibrium? False when the push was cut short (its step
+        cap, a failed solve): the released shape is then where the protocol let go, not a
+        result of the sheet."""
+        return answered(self.push_status) and not self.reason and bool(self.stable)
+
 @dataclass(repr=False)
 class SheetResult:
     """The steps of `simulate_sheet` in push order; ``final``: the last step (None: no
@@ -163,6 +172,12 @@ class SheetResult:
     @property
     def final(self):
         return self.steps[-1] if self.steps else None
+
+    @property
+    def complete(self) -> bool:
+        """Every step `SheetStep.complete` (a final reached through a cut-short push is not a
+        result of this order)."""
+        return bool(self.steps) and all(step.complete for step in self.steps)
 
     def __repr__(self):
         f = self.final
@@ -278,9 +293,12 @@ def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
 
     Returns {"orders": the orders run, "results": their `SheetResult`s, "groups": [{"orders":
     indices into "orders", "snapped": cells snapped in the shape, "stable": bool,
-    "positions": (n, 3) of the first, "spread": largest distance to it (m)}], "distinct":
-    the number of distinct stable shapes, "distances": (n, n) m between the finals,
-    "pushes": the pushes run (a prefix several orders share is pushed once)}."""
+    "positions": (n, 3) of the first, "spread": largest distance to it (m), "complete": the
+    indices of its orders whose every step is `SheetStep.complete`}], "distinct": the number
+    of distinct stable shapes, "distinct_complete": of those, the shapes reached by at least
+    one complete order (the others rest on a push cut short or a failed release: not shown
+    to be the sheet's), "distances": (n, n) m between the finals, "pushes": the pushes run
+    (a prefix several orders share is pushed once)}."""
     cells = check_order(sheet, cells)
     if len(set(cells)) != len(cells):
         raise ValueError(f"cells must be distinct cell indices; got {cells!r}")
@@ -307,9 +325,12 @@ def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
             groups.append({"orders": [i], "snapped": np.flatnonzero(r.final.snapped).tolist(),
                            "stable": bool(r.final.stable), "positions": finals[i],
                            "spread": 0.0})
+    for grp in groups:
+        grp["complete"] = [i for i in grp["orders"] if results[i].complete]
     distinct = sum(1 for grp in groups if grp["stable"])
+    complete = sum(1 for grp in groups if grp["stable"] and grp["complete"])
     return {"orders": runs, "results": results, "groups": groups, "distinct": distinct,
-            "distances": dist, "pushes": pushes}
+            "distinct_complete": complete, "distances": dist, "pushes": pushes}
 
 
 def _run_orders(sheet, runs, boundary, steps, progress=None):

@@ -14,7 +14,9 @@ cells share their edge strips). The cells of --order are pushed at their apex on
 may snap along or back), whether the released sheet is stable, and whether it fell into a
 global mode. Cells are numbered row after row from the bottom left (in a 3x3 square sheet
 cell 4 is the centre). Lengths in millimetres, forces in newtons, E in pascals (the Python
-API, units.sheet, is SI)."""
+API, units.sheet, is SI). Exit status 0 when every push answered and every release found a
+stable sheet; 1 when a push was cut short (its step cap, a failed solve) or a release
+failed: then the final shape is where the protocol let go, not a result."""
 
 
 def cells_text(text: str):
@@ -70,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
     plot = plot_file(args.plot)
     out = output_file(args.out, "--out")
     from snapmorph.units.sheet import build_sheet, check_order, simulate_sheet
+    from snapmorph.units.status import answered
 
     g = frame_unit_geometry(args)
     sheet = build_sheet(g, args.tiling, args.cells, nodes=args.nodes, nu=args.nu)
@@ -85,7 +88,12 @@ def run(args: argparse.Namespace) -> int:
               f"{format_value(s.stable):>6}  {format_value(s.global_mode):>11}  {snapped}")
         if s.reason:
             print(f"        released: {s.reason}")
+        if not answered(s.push_status):  # the whole status: the table cuts it at 12
+            print(f"        push cut short: {s.push_status}")
     print(f"  solve time {r.solve_time:.1f} s, {sheet.mesh.n_nodes} nodes")
+    if not r.complete:
+        print("NOT A RESULT: a push was cut short or a release found no stable state "
+              "(the final shape is where the protocol let go)")
     if out:
         from snapmorph.units.sheet_io import write_states
 
@@ -96,4 +104,4 @@ def run(args: argparse.Namespace) -> int:
 
         plot_states(r, plot)
         print(f"wrote {plot}")
-    return 0 if r.final.stable else 1
+    return 0 if r.complete else 1

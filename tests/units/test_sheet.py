@@ -192,3 +192,30 @@ def test_explore_orders_pushes_a_shared_prefix_once_with_the_same_bits():
         alone = simulate_sheet(sheet, out["orders"][i])
         for a, b in zip(out["results"][i].steps, alone.steps):
             assert np.array_equal(a.state, b.state) and a.F_cr == b.F_cr
+
+
+def test_a_step_cut_short_or_a_failed_release_is_not_complete():
+    """A released shape reached through a push stopped at its step cap (or a release that
+    found no stable state) is where the protocol let go, not a result of the sheet:
+    `SheetStep.complete` / `SheetResult.complete` say so, and explore_orders counts the
+    shapes reached by complete orders apart ("distinct_complete")."""
+    import dataclasses
+
+    from snapmorph.units.sheet import SheetResult, SheetStep
+
+    z = np.zeros(1)
+
+    def step(status, stable=True, reason=""):
+        return SheetStep(0, z, z, 1.0, status, np.zeros(1, bool), stable, 0, False, z, z, z,
+                         0.0, reason, 0.0, z)
+
+    assert step("ok").complete and step("monostable: F does not fall below zero").complete
+    assert step("second state unstable: x").complete
+    assert not step("not converged: stopped: more than 300 steps").complete
+    assert not step("timeout: wall-time limit").complete
+    assert not step("ok", stable=False).complete
+    assert not step("ok", reason="no stable equilibrium found without the actuator").complete
+    r = SheetResult(None, "free", [0, 1], [step("ok"), step("ok")])
+    assert r.complete
+    assert not dataclasses.replace(r, steps=[step("ok"), step("not converged: x")]).complete
+    assert not SheetResult(None, "free", []).complete
