@@ -23,6 +23,7 @@ sys.path.insert(0, os.path.dirname(HERE))
 
 #: the target of issue 25: a 3 x 3 sheet snapping all nine cells, one core
 TARGET_3X3_S = 60.0
+NOT_COMPLETE = "NOT complete: a push cut short or a release failed (no result)"
 
 
 def centre_out(rows, cols):
@@ -44,7 +45,8 @@ def run(shape, order):
     total, cpu = time.perf_counter() - t0, time.process_time() - c0
     # CPU seconds too: on a shared machine the wall clock counts the other processes' turns
     print(f"sheet {shape[0]}x{shape[1]}: {sheet.mesh.n_nodes} nodes, {system.n} DOFs "
-          f"({system.factorisation}), order {order}: {total:.1f} s wall, {cpu:.1f} s CPU",
+          f"({system.factorisation}), order {order}: {total:.1f} s wall, {cpu:.1f} s CPU; "
+          f"{'every push answered' if r.complete else NOT_COMPLETE}",
           flush=True)
     for s in r.steps:
         print(f"  cell {s.cell:2d}: {s.seconds:6.1f} s  F_cr {s.F_cr:.3f} N  push {s.push_status[:40]!r}"
