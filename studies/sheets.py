@@ -68,7 +68,9 @@ def convergence(meshes=(21, 31, 41), order=(4, 0, 8)):
         t0 = time.perf_counter()
         a, k, r = final_shape(nodes, list(order))
         rows.append((nodes, a, k))
-        print(f"nodes {nodes}: {time.perf_counter() - t0:.0f} s, snapped "
+        print(f"nodes {nodes}: {time.perf_counter() - t0:.0f} s, "
+              f"{'complete' if r.complete else 'NOT complete (no result)'}, pushes "
+              f"{[s.push_status[:40] for s in r.steps]}, snapped "
               f"{np.flatnonzero(r.final.snapped).tolist()}, stable {r.final.stable}, "
               f"apex heights (mm) {np.round(1e3 * a, 2).tolist()}", flush=True)
     _, a_ref, k_ref = rows[-1]
@@ -246,7 +248,8 @@ def coupling(order=(4, 0, 8), nodes=21):
                   f"stable {step.stable}, global mode {step.global_mode}) from the {name}: "
                   f"rms error {c['rms_error']:.3f} 1/m = {100 * c['relative']:.0f} % of the "
                   f"sheet's rms {np.sqrt(np.mean(c['simulated'] ** 2)):.3f} 1/m, max "
-                  f"{c['max_error']:.3f} 1/m", flush=True)
+                  f"{c['max_error']:.3f} 1/m; push {step.push_status[:40]!r}, complete "
+                  f"{step.complete}", flush=True)
 
 
 if __name__ == "__main__":
