@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from snapmorph.design.inverse_result import Design, Piece
-from snapmorph.design.map_model import FastModel, chain_fast
+from snapmorph.design.map_model import FastModel, b_length_min, chain_fast
 from snapmorph.design.targets import Target, deviation
 from snapmorph.design.units import Unit
 from snapmorph.design.verification import assess
@@ -59,7 +59,7 @@ def fabrication_limits(dm, t, w, L_range, hL_range, min_barrier, state_kw) -> Li
     w/L inside the map, h/L where every unit of the L range is bistable with an energy barrier
     of at least `min_barrier` (E I_arch / L units)."""
     rng = getattr(dm, "ranges", None) or {}
-    lo, hi = 0.0, math.inf
+    lo, hi = b_length_min(dm, w), math.inf  # units of flat ends b: b/L inside the map too
     for name, v in (("t_over_L", t), ("w_over_L", w)):
         if name in rng:
             a, b = rng[name]
@@ -73,6 +73,7 @@ def fabrication_limits(dm, t, w, L_range, hL_range, min_barrier, state_kw) -> Li
         raise ValueError(
             f"no valid unit: the map covers unit lengths {map_L[0] * 1e3:.1f} to "
             f"{map_L[1] * 1e3:.1f} mm at t = {t * 1e3:g} mm, w = {w * 1e3:g} mm"
+            + _b_words(dm, w)
             + (f", L_range is {L_range[0] * 1e3:g} to {L_range[1] * 1e3:g} mm"
                if L_range is not None else "") + "; they do not overlap")
     hs = np.asarray(dm.h_over_L, dtype=float)
@@ -112,6 +113,12 @@ def fabrication_limits(dm, t, w, L_range, hL_range, min_barrier, state_kw) -> Li
     th = np.asarray(dm.at(np.array([hL_min, hL_max]), np.full(2, t / Lmid), np.full(2, w / Lmid),
                           allow_nan=True, **state_kw)["theta"], float)
     return Limits(lo, hi, hL_min, hL_max, float(np.min(th)), float(np.max(th)))
+
+
+def _b_words(dm, w) -> str:
+    """", b = 5 mm" for a map seen at flat ends b (`map_at_b`), else ""."""
+    b_over_w = getattr(dm, "b_over_w", None)
+    return f", b = {b_over_w * w * 1e3:g} mm" if b_over_w else ""
 
 
 def _increasing_pair(name, value, what, order) -> tuple[float, float]:

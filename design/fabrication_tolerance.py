@@ -5,8 +5,9 @@
     r.envelope_contains(xy), r.free_end_summary(), r.p_bistable
 
 Every arched unit's L, h, t (and w when given in ``sigma``) are drawn independently from
-normal distributions about their nominal values (standard deviations in m); b follows L (the
-map's b/L). Each sample's all-snapped array is built by forward kinematics from the map with
+normal distributions about their nominal values (standard deviations in m); b follows L (each
+unit keeps its nominal b/L). On a map with a b/L axis every unit is looked up at its own b/L
+(units.csv's b_mm); a map at one b/L takes only units at that b/L. Each sample's all-snapped array is built by forward kinematics from the map with
 vectorised lookups (one interpolation call per quantity for all samples and units), in the
 released state by default. Spacers change length only (sigma "L").
 
@@ -215,9 +216,41 @@ def _draw(units, sigma, n, rng):
     return out
 
 
-def _fk_samples(dm, units, draws, state, stations):
+def _b_over_L(dm, units):
+    """(n_units,) b/L to look each unit up at on a map with a b/L axis (b follows L: the
+    nominal b/L of every sample), or None on a map at one b/L, which every arched unit must
+    have. ValueError naming b and the map's b range otherwise."""
+    if "b_over_L" not in tuple(getattr(dm, "dims", ())):
+        fixed = getattr(dm, "fixed_b_over_L", None)
+        fixed = float(dm.attrs.get("b_over_L", 0.0) if fixed is None else fixed)
+        for i, u in enumerate(units):
+            if not u.is_spacer and abs(u.b / u.L - fixed) > 1e-6:
+                raise ValueError(
+                    f"unit {i + 1} has b = {u.b * 1e3:.4g} mm (b/L = {u.b / u.L:.4g}), but the "
+                    f"design map has no b/L axis: it was built at the one b/L = {fixed:.4g} "
+                    f"(b = {fixed * u.L * 1e3:.4g} mm for this unit); use a map with a b/L axis "
+                    f"(the default map) for other b")
+        return None
+    lo, hi = dm.ranges["b_over_L"]
+    tol = 1e-9 * (hi - lo)
+    out = np.zeros(len(units))
+    for i, u in enumerate(units):
+        if u.is_spacer:
+            continue
+        bL = u.b / u.L
+        if not lo - tol <= bL <= hi + tol:
+            raise ValueError(
+                f"unit {i + 1} has b = {u.b * 1e3:.4g} mm (b/L = {bL:.4g}), outside the design "
+                f"map's b range: b/L in [{lo:g}, {hi:g}], b in [{lo * u.L * 1e3:.4g}, "
+                f"{hi * u.L * 1e3:.4g}] mm at its L = {u.L * 1e3:.4g} mm")
+        out[i] = min(max(bL, lo), hi)
+    return out
+
+
+def _fk_samples(dm, units, draws, state, stations, b_over_L=None):
     """Forward kinematics of every sample: (station points (n, u, m, 2), ends (n, 2), end
-    angles (n,) rad, bistable (n, u) bool, inside map (n,) bool)."""
+    angles (n,) rad, bistable (n, u) bool, inside map (n,) bool). ``b_over_L``: None (the
+    map's one b/L) or (n_units,) each unit's b/L on a map with a b/L axis."""
     from snapmorph.design.shapes import conform  # noqa: F401  (the same similarity, vectorised below)
 
     L, h, t, w = draws["L"], draws["h"], draws["t"], draws["w"]
@@ -239,9 +272,12 @@ def _fk_samples(dm, units, draws, state, stations):
     ja = np.flatnonzero(arched)
     if idx.size:
         q = np.ix_(idx, ja)
-        vals = dm.at(hL[q], tL[q], wL[q], allow_nan=True, state=state)
+        kw = {} if b_over_L is None else {
+            "b_over_L": np.broadcast_to(np.asarray(b_over_L, float)[ja], hL[q].shape)}
+        vals = dm.at(hL[q], tL[q], wL[q], allow_nan=True, state=state, **kw)
         th, S = np.asarray(vals["theta"], float), np.asarray(vals["S"], float)
-        shp = np.asarray(dm.base_shape(hL[q], tL[q], wL[q], allow_nan=True, state=state), float)
+        shp = np.asarray(dm.base_shape(hL[q], tL[q], wL[q], allow_nan=True, state=state, **kw),
+                         float)
         ok = np.isfinite(th) & np.isfinite(S) & np.all(np.isfinite(shp), axis=(-2, -1))
         bist[q] = ok
         # conform each shape to its (S, theta) (as design.shapes.conform), scale by L
@@ -322,7 +358,9 @@ def tolerance(units, sigma=None, n: int = 1000, seed: int = 0, design_map=None,
     ``sigma``: standard deviations in m by dimension (keys L, h, t, w; default
     {"h": 0.5e-3, "L": 0.3e-3, "t": 0.02e-3}); ``n``: samples (>= 10); ``seed``: the random
     generator's seed (identical inputs give identical results); ``design_map``: a
-    `maps.DesignMap` (default map); ``state``: "released" (default) or "actuated";
+    `maps.DesignMap` (default map; each unit is looked up at its own b/L on a map with a b/L
+    axis, ValueError naming b and the map's range when a unit's b/L is outside it or, on a map
+    at one b/L, is not that one); ``state``: "released" (default) or "actuated";
     ``stations``: envelope points per unit; ``held_out``: also measure the envelope's
     coverage of a second, independent set of n samples (`held_out_coverage`); ``floor``: the
     smallest half-width of the envelope's normal band (m, default `ENVELOPE_FLOOR_MM`)."""
@@ -344,22 +382,18 @@ def tolerance(units, sigma=None, n: int = 1000, seed: int = 0, design_map=None,
         raise ValueError(f"floor (smallest envelope half-width, m) must be in [0, 0.01] m; "
                          f"got {floor!r}")
     dm = design_map if design_map is not None else load_map(None)
-    b_map = float(dm.attrs.get("b_over_L", 0.0))
-    for i, u in enumerate(units):
-        if not u.is_spacer and abs(u.b / u.L - b_map) > 1e-6:
-            raise ValueError(f"unit {i + 1} has b/L = {u.b / u.L:.4g} but the design map was built "
-                             f"at b/L = {b_map:.4g}")
+    bL = _b_over_L(dm, units)
     t0 = time.perf_counter()
     rng = np.random.default_rng(int(seed))
     nominal_draw = {k: np.array([[getattr(u, k) for u in units]], float) for k in SIGMA_KEYS}
     nom_pts, nom_end, nom_ang, nom_ok, nom_in = _fk_samples(dm, units, nominal_draw, state,
-                                                            stations)
+                                                            stations, bL)
     if not (nom_in[0] and np.all(nom_ok[0])):
         bad = [i + 1 for i in range(len(units)) if not nom_ok[0, i]]
         raise ValueError("the nominal units are not all bistable in the map "
                          f"({state} state)" + (f": units {bad}" if bad else ": outside its range"))
     draws = _draw(units, sigma, int(n), rng)
-    pts, ends, ang, bist, inside = _fk_samples(dm, units, draws, state, stations)
+    pts, ends, ang, bist, inside = _fk_samples(dm, units, draws, state, stations, bL)
     usable = inside & np.all(bist, axis=1)
     p_bistable = np.where(inside[:, None], bist, False).sum(axis=0) / max(int(inside.sum()), 1)
     stations_nom = nom_pts[0]
@@ -381,7 +415,7 @@ def tolerance(units, sigma=None, n: int = 1000, seed: int = 0, design_map=None,
     res.time_s = time.perf_counter() - t0
     if held_out:
         d2 = _draw(units, sigma, int(n), rng)
-        p2, _, _, b2, in2 = _fk_samples(dm, units, d2, state, stations)
+        p2, _, _, b2, in2 = _fk_samples(dm, units, d2, state, stations, bL)
         ok2 = in2 & np.all(b2, axis=1)
         o2 = res.offsets(p2[ok2])[..., 1]
         lo, hi = res.band()

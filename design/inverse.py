@@ -102,7 +102,7 @@ def inverse_design(points, t: float, w: float, *, tangents=None, controls=None,
         UserWarning is given.
     b: extra flat length of every arched unit's ends, m (the paper's specimens: b = w); the
         map is read at b/L = b / L of each unit (it needs a b/L axis, unless b is 0 on a map
-        built at b/L = 0). None: today's behaviour, the map's own b/L (0 on the committed
+        built at b/L = 0), so units are at least b / (the map's largest b/L) long. None: today's behaviour, the map's own b/L (0 on the committed
         maps), every unit's b = that b/L times its L.
     """
     import warnings

@@ -83,17 +83,20 @@ class Design:
 
     def table(self) -> str:
         """The unit table as text (mm, degrees): each unit's snapped turning and chord (forward
-        kinematics) and the turning of the target arc(s) it stands for."""
+        kinematics) and the turning of the target arc(s) it stands for; b_mm (the arch's flat
+        ends) when an arched unit has b > 0, as units.csv."""
         ch = self._chain
         turn = np.degrees(np.diff(ch.angles))
         chord = np.hypot(*np.diff(ch.joints, axis=0).T)
+        with_b = any(u.b > 0 and not u.is_spacer for u in self.units)
         lines = [f"{'unit':>4} {'L_mm':>7} {'h_mm':>6} {'h/L':>6} {'side':>4} {'turn_deg':>8} "
-                 f"{'S_mm':>7} {'target_deg':>10}"]
+                 f"{'S_mm':>7} {'target_deg':>10}" + (f" {'b_mm':>6}" if with_b else "")]
         for i, (u, p) in enumerate(zip(self.units, self.pieces)):
             hl = f"{u.h / u.L:6.3f}" if u.h > 0 else "     -"
             side = f"{u.side:+d}" if u.side else "0"
+            b = (f" {'-' if u.is_spacer else f'{u.b * 1e3:.2f}':>6}") if with_b else ""
             lines.append(f"{i + 1:>4} {u.L * 1e3:7.1f} {u.h * 1e3:6.1f} {hl} {side:>4} "
-                         f"{turn[i]:8.2f} {chord[i] * 1e3:7.1f} {p.turn_deg:10.2f}")
+                         f"{turn[i]:8.2f} {chord[i] * 1e3:7.1f} {p.turn_deg:10.2f}{b}")
         return "\n".join(lines)
 
     def write(self, out_dir, bed_length_mm: float | None = None, colours: dict | None = None,

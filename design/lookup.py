@@ -204,6 +204,7 @@ class MapLookup:
     def _theta_range_uncached(self, t, w, state):
         # Interpolation cells touching a monostable grid point are undefined, so the bistable
         # range is bounded by grid nodes: scanning the nodes is enough.
+        self._check_b(w)
         hs = self.grid("h_over_L")
         if hs is None or hs.size < 2:
             hs = np.linspace(0.01, 0.6, 119)
@@ -261,6 +262,23 @@ class MapLookup:
                 raise ValueError(
                     f"a unit of L = {L * 1e3:.4g} mm has {what}/L = {value:.4g}, outside the map's "
                     f"{what}/L range [{b[0]:.4g}, {b[1]:.4g}]; change {what} or the target's size")
+        self._check_b(w_L, L)
+
+    def _check_b(self, w_L, L=None):
+        """On a map seen at flat ends b (`map_model.map_at_b`: b/L = (b / w) w/L), ValueError
+        naming b when the b/L of a unit of this w/L (and length L, m) is outside the map's."""
+        b_over_w = getattr(self.dm, "b_over_w", None)
+        bounds = self.bounds("b_over_L")
+        if not b_over_w or bounds is None:
+            return
+        value = b_over_w * w_L
+        if bounds[0] - 1e-12 <= value <= bounds[1] * (1 + 1e-9):
+            return
+        unit = "a unit" if L is None else f"a unit of L = {L * 1e3:.4g} mm"
+        raise ValueError(
+            f"{unit} (w/L = {w_L:.4g}) has b/L = {value:.4g} with its flat ends b, outside the "
+            f"map's b/L range [{bounds[0]:.4g}, {bounds[1]:.4g}] (units need L >= "
+            f"b / {bounds[1]:.4g}); give a smaller b or scale the target up")
 
 
 def _r(x, digits=12):

@@ -100,6 +100,17 @@ def map_at_b(dm, b: float, w: float):
     return BMap(dm, b / w)
 
 
+def b_length_min(dm, w: float) -> float:
+    """The shortest unit length (m) the map's b/L range allows to units of strip width ``w``
+    (m) seen through `map_at_b` (b/L = (b / w) w/L <= the map's largest b/L): 0 for a map that
+    is not such a view, or at b = 0."""
+    b_over_w = getattr(dm, "b_over_w", None)
+    rng = getattr(dm, "ranges", None) or {}
+    if not b_over_w or "b_over_L" not in rng:
+        return 0.0
+    return float(b_over_w) * float(w) / rng["b_over_L"][1]
+
+
 class BMap:
     """A design map whose lookups get ``b_over_L = b_over_w * w_over_L`` (see `map_at_b`);
     everything else is the wrapped map's."""

@@ -132,7 +132,14 @@ def _check_b(unit: Unit, lookup: MapLookup):
     """The b/L to look the unit up at: its own on a map with a b/L axis, else None (the map's
     own, which must be the unit's)."""
     if lookup.has_b_axis:
-        return unit.b / unit.L
+        bL, bounds = unit.b / unit.L, lookup.bounds("b_over_L")
+        if bounds is not None and not bounds[0] - 1e-12 <= bL <= bounds[1] * (1 + 1e-9):
+            raise ValueError(
+                f"unit b = {unit.b * 1e3:.4g} mm (b/L = {bL:.4g}) is outside the design map's b "
+                f"range: b/L in [{bounds[0]:.4g}, {bounds[1]:.4g}], b in "
+                f"[{bounds[0] * unit.L * 1e3:.4g}, {bounds[1] * unit.L * 1e3:.4g}] mm at its "
+                f"L = {unit.L * 1e3:.4g} mm; or use source='simulate'")
+        return bL
     b_map = lookup.b_over_L
     if abs(unit.b / unit.L - b_map) > 1e-6:
         raise ValueError(

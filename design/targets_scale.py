@@ -32,13 +32,16 @@ SLIP_MAX_UNITS = 40
 
 def unit_length_range(t: float, w: float, design_map=None, L_range=None) -> tuple:
     """(L_min, L_max) in m: the unit lengths the design map covers at sheet thickness t and
-    strip width w (m), i.e. t/L and w/L inside the map, intersected with L_range if given."""
+    strip width w (m), i.e. t/L and w/L (and b/L, for a map seen at flat ends b:
+    `map_model.map_at_b`) inside the map, intersected with L_range if given."""
+    from snapmorph.design.map_model import b_length_min
+
     if design_map is None:
         from snapmorph.maps import DesignMap
 
         design_map = DesignMap.load()
     rng = design_map.ranges
-    lo = max(t / rng["t_over_L"][1], w / rng["w_over_L"][1])
+    lo = max(t / rng["t_over_L"][1], w / rng["w_over_L"][1], b_length_min(design_map, w))
     hi = min(t / rng["t_over_L"][0], w / rng["w_over_L"][0])
     if L_range is not None:
         lo, hi = max(lo, float(L_range[0])), min(hi, float(L_range[1]))
@@ -56,7 +59,9 @@ def check_scale(length_m: float, t: float, w: float, *, design_map=None, L_range
     LONG_FACTOR × max_units × the longest unit."""
     lo, hi = unit_length_range(t, w, design_map, L_range)
     mm = length_m * 1e3
-    at = f"at t = {t * 1e3:g} mm, w = {w * 1e3:g} mm"
+    b_over_w = getattr(design_map, "b_over_w", None)
+    at = f"at t = {t * 1e3:g} mm, w = {w * 1e3:g} mm" + (
+        f", b = {b_over_w * w * 1e3:g} mm" if b_over_w else "")
     if length_m < lo:
         slips = [(word, mm * f, flag) for word, f, flag in SHORT_SLIPS
                  if lo * 1e3 <= mm * f <= PLAUSIBLE_MM]

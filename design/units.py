@@ -180,6 +180,15 @@ def read_placement(path):
     return None
 
 
+def has_b_column(path) -> bool:
+    """Whether a units.csv's header (its first line not starting with #) has the b_mm column."""
+    with Path(path).open(newline="") as fh:
+        for line in fh:
+            if line.strip() and not line.lstrip().startswith("#"):
+                return "b_mm" in (c.strip() for c in next(csv.reader([line])))
+    return False
+
+
 def read_units_csv(path, b_over_L: float = 0.0) -> list[Unit]:
     """Read `units.csv`. An arched unit's b is its row's b_mm when the file has that column
     (`write_units_csv` writes it), else b_over_L * L; a spacer's b is 0.

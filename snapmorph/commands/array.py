@@ -19,7 +19,9 @@ directly simulated single units (source "simulate").
         [--load 2:apex:0,-0.05]     the morphed array under its weight and loads: sag (mm),
                                     states held, the load the first unit snaps back at, strain
 
-Lengths in units.csv are millimetres; units.csv has no b column (--b-over-L sets b = b/L L)."""
+Lengths in units.csv are millimetres. An arch's flat-end length b is its b_mm column (as
+`snapmorph design --b` writes it); a units.csv without that column gets b = --b-over-L x L
+(default 0)."""
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -29,7 +31,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("array", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     what = p.add_mutually_exclusive_group(required=True)
-    what.add_argument("--units", help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
+    what.add_argument("--units", help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side[, b_mm])")
     what.add_argument("--paper-three", action="store_true",
                       help="every state of the paper's three units (t 0.5, h 20, w 5, L 100 mm)")
     what.add_argument("--paper-M", action="store_true",
@@ -41,7 +43,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--all", action="store_true", help="with --units: every state (a study)")
     p.add_argument("--b-over-L", type=number("", 0.0, 0.5, low_inclusive=True,
                                              high_inclusive=False, what="b / L"), default=0.0,
-                   help="b / L of the arched units read from --units (default 0)")
+                   help="b / L of the arched units read from a --units file without a "
+                        "b_mm column (default 0)")
     p.add_argument("--b", type=length_mm(0.0, low_inclusive=True, what="flat end length b"),
                    default=None,
                    help="with --paper-three: b in mm (default 5 = w, the specimens)")
@@ -96,6 +99,7 @@ def _check_paths(args, study):
 
     if args.units:
         input_file(args.units, "--units")
+        _check_b_source(args)
     if args.overlay:
         input_file(args.overlay, "--overlay")
     if study:
@@ -104,6 +108,20 @@ def _check_paths(args, study):
     else:
         plot_file(args.plot, "--plot")
         output_file(args.csv, "--csv")
+
+
+def _check_b_source(args):
+    """--b-over-L and a units.csv with b_mm would give b twice: refuse rather than ignore one."""
+    from snapmorph.cli import CommandError
+    from snapmorph.design.units import has_b_column
+
+    try:
+        both = args.b_over_L > 0 and has_b_column(args.units)
+    except (OSError, UnicodeDecodeError):
+        return  # read_units_csv says what is wrong with the file
+    if both:
+        raise CommandError(f"--b-over-L {args.b_over_L:g}: {args.units} has a b_mm column, which "
+                           "gives each arch's b; leave --b-over-L out (or drop the column)")
 
 
 def run(args) -> int:

@@ -40,7 +40,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--b", type=length_mm(0.0, low_inclusive=True,
                                          what="extra flat length of the arch ends"),
                    default=None, help="extra flat length of every arch's ends, mm (the paper's "
-                   "specimens: b = w; needs a map with a b/L axis); default: the map's own b/L")
+                   "specimens: b = w; needs a map with a b/L axis, and units then are at least "
+                   "b / (its largest b/L) long: 100 mm at b = 5 on the default map); default: "
+                   "the map's own b/L")
     p.add_argument("--out", default="build/design", help="output directory (default %(default)s)")
     p.add_argument("--map", default=None, help="design map netCDF (default: the committed map)")
     p.add_argument("--tol", type=float, default=None,

@@ -18,7 +18,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                                             add_target_options)
 
     p = subparsers.add_parser("fk", help=HELP, description=HELP + ".", epilog=EPILOG)
-    p.add_argument("--units", required=True, help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
+    p.add_argument("--units", required=True,
+                   help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side[, b_mm])")
     add_snapped_option(p, ", '0' for spacers, e.g. 101 (default: every arched unit snapped)")
     p.add_argument("--all", action="store_true",
                    help="every snap pattern (2^n), plotted in one figure")

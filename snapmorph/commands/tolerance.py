@@ -10,7 +10,8 @@ from snapmorph.commands._common import (add_target_options, add_unit_state_optio
 HELP = """Propagate fabrication errors of hand-made units (normal errors in L, h, t and w,
 standard deviations in millimetres) through the design map: the envelope of the all-snapped
 shape, the scatter of the free end (mm and degrees) and each unit's probability of staying
-bistable. Units come from a units.csv (as `snapmorph design` writes it)."""
+bistable. Units come from a units.csv (as `snapmorph design` writes it); an arch's b is its
+b_mm column (b follows L in the samples), looked up at its own b/L on a map with a b/L axis."""
 
 EPILOG = """Frame: the envelope is drawn with unit 1 starting at (0, 0) heading +x; --target
 (the design's target: its target.csv, or the SVG, DXF or CSV it was designed from, with
@@ -25,7 +26,7 @@ per array)."""
 def add_parser(sub):
     p = sub.add_parser("tolerance", help="fabrication tolerance of an array (Monte Carlo)",
                        description=HELP, epilog=EPILOG)
-    p.add_argument("units", help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side)")
+    p.add_argument("units", help="units.csv (unit, L_mm, h_mm, t_mm, w_mm, side[, b_mm])")
     for name, what, default in (("h", "the arch height h", 0.5), ("L", "the base length L", 0.3),
                                 ("t", "the thickness t", 0.02), ("w", "the strip width w", 0.0)):
         p.add_argument(f"--sigma-{name}", type=number("mm", 0, 10, low_inclusive=True,
