@@ -154,7 +154,12 @@ def build_unit_mesh_3d(
     ``brace_width``: width (m) of the in-plane braces of each end plate (default b + w, the
     plate's length: the end plate is then in-plane rigid next to the rest); ``end_plate``:
     "elastic" (the sheet's own stiffness) or "stiff" (cross bars of 1e4 x E: the end
-    plates keep their shape across the width, as the planar model assumes).
+    plates keep their shape across the width, as the planar model assumes);
+    ``joints``: how rods crossing at a node are joined: "bond" (`Mesh3D.bond`: pairs of edges
+    in both orders) or "node" (one node frame per junction, `units.junctions3d`, listed in
+    the model's ``junctions``; docs/unit3d.md); ``foot_refinement``: the edges next to the
+    arch feet x0 are this many times shorter than the spacing, doubling in length away from
+    them (1: the uniform mesh).
     Returns a `Unit3DModel` whose ``structure`` is None.
     """
     if not isinstance(g, UnitGeometry):
@@ -560,7 +565,8 @@ def simulate_unit_3d(
     ``nodes``: resolution (nodes along a rail; None = DEFAULT_NODES_3D); ``steps``: first
     step as a fraction of 3 h; ``critical``: detect bifurcations on the path (slower);
     ``check_self_standing``: also release the bistable unit's state (iii) (actuator and
-    rollers removed) and report ``released`` and ``self_standing`` (as the planar unit).
+    rollers removed) and report ``released`` and ``self_standing`` (as the planar unit);
+    ``joints``, ``foot_refinement``: the mesh options of `build_unit_mesh_3d` (issue 25).
     Arguments are validated (ValueError naming the parameter); after that it never raises
     for a unit that can be built: failures come back in ``status`` and ``reason``.
     """

@@ -9,7 +9,8 @@ import pytest
 
 from snapmorph.solver import Structure3D
 from snapmorph.solver.equilibrium import equilibrium
-from snapmorph.units.junctions3d import junction_arms, rigid_junction, star_mesh_stiffness
+from snapmorph.units.junctions3d import (junction_arms, pair_constants, pair_rotation_rows,
+                                         rigid_junction, star_mesh_stiffness)
 
 E, NU, W, T, L = 2.2e9, 0.38, 5e-3, 0.5e-3, 0.1
 
@@ -27,14 +28,32 @@ def _tip_deflection(st, tip, direction, P):
 
 def test_star_mesh_stiffness_of_two_arms_is_the_series_pair():
     g = np.array([[1.0, 2.0, 3.0], [4.0, 6.0, 0.5]])
-    k = star_mesh_stiffness(g)
-    assert k[0, 1] == pytest.approx(1.0 / (1.0 / g[0] + 1.0 / g[1]), rel=1e-15)
+    k = star_mesh_stiffness([np.diag(v) for v in g])
+    assert np.diagonal(k[0, 1]) == pytest.approx(1.0 / (1.0 / g[0] + 1.0 / g[1]), rel=1e-15)
     g3 = np.vstack([g, [[1e12, 1e-12, 2.0]]])
-    k3 = star_mesh_stiffness(g3)
+    k3 = star_mesh_stiffness([np.diag(v) for v in g3])
     # a rigid third arm ties each arm to itself over that arm's half edge only; a
     # vanishing one leaves the other two in series
-    assert k3[0, 2, 0] == pytest.approx(g[0, 0], rel=1e-9)
-    assert k3[0, 1, 1] == pytest.approx(k[0, 1, 1], rel=1e-9)
+    assert k3[0, 2, 0, 0] == pytest.approx(g[0, 0], rel=1e-9)
+    assert k3[0, 1, 1, 1] == pytest.approx(k[0, 1, 1, 1], rel=1e-9)
+
+
+def test_pair_constants_fit_a_kinked_pair():
+    """The pair's rows at a right angle, as the kernel measures them: kappa1 and psi measure
+    rotations across and about the bisector of the two tangents, kappa2 about the normal
+    (twice the angle, 2 tan(phi / 2)); a stiffness with equal in-plane axes is fitted
+    exactly."""
+    x, y, z = np.eye(3)
+    rows = pair_rotation_rows((x, z, 1.0), 1.0, (y, z, 1.0), 1.0)
+    assert rows == pytest.approx(np.array([[1, -1, 0], [0, 0, -2], [1, 1, 0]]), abs=1e-12)
+    K = np.diag([3.0, 3.0, 5.0])
+    k1, k2, kt = pair_constants(rows, K)
+    M = k1 * np.outer(rows[0], rows[0]) + k2 * np.outer(rows[1], rows[1]) + kt * np.outer(
+        rows[2], rows[2])
+    assert M == pytest.approx(K, rel=1e-12)
+    # unequal axes: the mean is kept, the difference (an off-diagonal term) is not
+    k1, _, kt = pair_constants(rows, np.diag([2.0, 4.0, 5.0]))
+    assert (k1, kt) == pytest.approx((1.5, 1.5), rel=1e-12)
 
 
 @pytest.mark.parametrize("direction", [(0.0, 0.0, -1.0), (0.0, 1.0, 0.0)])
@@ -67,13 +86,13 @@ def _cantilever_with_branch(join):
     return st, int(r.nodes[-1])
 
 
-def test_a_free_branch_stiffens_the_rod_it_leaves_less_than_bonds_do():
+def test_a_free_branch_leaves_the_rod_it_leaves_alone():
     """A branch that carries no load should change nothing. The pair-of-edges joints in both
     orders (`Mesh3D.bond`) tie the through rod's two edges to each other through the branch
     and stiffen it: the tip deflection of a 20-edge cantilever falls 2.0 % (bending through
-    the thickness) and 2.5 % (in plane). At one node frame the star-mesh transform would be
-    exact if the pairs measured rotations alike at every angle; at a right angle they
-    measure them as if collinear, and 1.1 % and 1.9 % remain (measured)."""
+    the thickness) and 2.5 % (in plane). At one node frame it is unchanged in plane (to the
+    solve's tolerance) and grows 0.074 % in bending, where the right-angle pair keeps only
+    the mean of the through rod's twist and the branch's bending stiffness (measured)."""
     plain = Structure3D()
     r = plain.add_rod(_line(0, L, 21), width=W, thickness=T, E=E, nu=NU)
     plain.clamp(r.nodes[0], toward=r.nodes[1])
@@ -83,15 +102,15 @@ def test_a_free_branch_stiffens_the_rod_it_leaves_less_than_bonds_do():
         s.joint(a, b)
         s.joint(b, a)
 
-    for direction in ((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)):
+    for direction, tol in (((0.0, 0.0, -1.0), 1e-3), ((0.0, 1.0, 0.0), 1e-8)):
         d_plain = _tip_deflection(plain, int(r.nodes[-1]), direction, P)
         errors = []
         for join in (lambda s, a, b: rigid_junction(s, [a, b]), both_orders):
             st, tip = _cantilever_with_branch(join)
             errors.append(_tip_deflection(st, tip, direction, P) / d_plain - 1)
         junction, bond = errors
-        assert bond < junction < 0
-        assert abs(junction) < 0.8 * abs(bond)
+        assert abs(junction) < tol
+        assert bond < -0.015
 
 
 def test_arms_and_bad_junctions():
