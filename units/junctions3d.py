@@ -70,8 +70,9 @@ def pair_rotation_rows(frame_a, sa, frame_b, sb):
     """(3, 3) rows r_c: the change of the pair's (kappa1, kappa2, psi) per rotation of frame b
     against frame a about each global axis, at the stress-free frames (the kernel's exact
     gradients carried by dv = omega x v). The pair's energy is then 1/2 omega^T (sum_c k_c
-    r_c r_c^T) omega: about t, m2 and m1 for collinear edges, about the bisector of the two
-    tangents and across it (each scaled by sec^2 of half the angle) at a kink."""
+    r_c r_c^T) omega: rotations about t, m2 and m1 for collinear edges; at a kink in the
+    strips' plane, about the bisector of the two tangents and across it, with energies
+    scaled by sec^2 of half the angle (the kernel's 2 tan(angle / 2))."""
     from snapmorph.solver.energies3d import material_curvature, twist_angle
     from snapmorph.solver.structure3d import _frame_pair
 
@@ -102,7 +103,7 @@ def pair_constants(rows, K):
     return tuple(float(v) for v in np.maximum(np.linalg.solve(A, b), 0.0))
 
 
-def rigid_junction(structure, nodes):  # noqa: C901 - one loop over the pairs of arms
+def rigid_junction(structure, nodes):
     """Join the coincident ``nodes`` (of any rods, each an end or an interior node) rigidly at
     one node frame: positions shared, and every two edges touching the node coupled by the
     pair of the star-mesh transform (module docstring), which replaces the rods' own node
