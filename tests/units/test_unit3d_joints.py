@@ -82,6 +82,7 @@ def _theta(nodes, **options):
     return simulate_unit_3d(TALL, nodes=nodes, check_self_standing=False, **options).theta_deg
 
 
+@pytest.mark.slow
 def test_graded_feet_converge_the_stiff_plates_at_a_coarse_mesh():
     """Stiff plates, h = 40.68 mm: uniform meshes move theta by 0.73 deg from 41 to 81 nodes
     (124.16 / 123.44 deg; about 122.75 converged), edges 4 (8) times shorter at the feet by
@@ -93,6 +94,7 @@ def test_graded_feet_converge_the_stiff_plates_at_a_coarse_mesh():
     assert abs(graded[0] - uniform[1]) < abs(uniform[0] - uniform[1])
 
 
+@pytest.mark.slow
 def test_node_joints_and_graded_feet_converge_both_plates_at_the_default_mesh():
     """h = 40.68 mm: with the bonds and a uniform mesh, elastic plates move theta by 0.66 deg
     from 41 to 81 nodes (129.66 / 130.32 deg); with joints="node" and foot_refinement=8 by
