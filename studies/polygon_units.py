@@ -3,7 +3,8 @@
 
     .venv/bin/python -m studies.polygon_units triangle              # where is the triangle bistable
     .venv/bin/python -m studies.polygon_units convergence [nodes,...]   # 21,41,81 by default
-    .venv/bin/python -m studies.polygon_units unit3d [plates] [nodes,...]  # theta vs mesh, CPU s
+    .venv/bin/python -m studies.polygon_units unit3d [plates] [nodes,...] [option=value ...]
+        # theta vs mesh, CPU s; options of simulate_unit_3d, e.g. joints=node foot_refinement=4
 
 Each prints CSV rows as it goes (SI lengths over L, N, degrees, CPU seconds).
 """
@@ -67,10 +68,10 @@ def convergence(meshes=(21, 41, 81)):
                  r.theta_released_deg - last.theta_released_deg)
 
 
-def unit3d(plates=("elastic", "stiff"), meshes=(41, 81, 121, 161, 241)):
+def unit3d(plates=("elastic", "stiff"), meshes=(41, 81, 121, 161, 241), **options):
     """The 3-D unit at the Table 1 specimen h = 40.68 mm, t = 0.5, w = b = 5 mm: theta (state
     (iii) and released), F_cr and the CPU time of one call (warm, this process's CPU time)
-    per mesh."""
+    per mesh; ``options`` go to `simulate_unit_3d` (joints, foot_refinement)."""
     from snapmorph.units.unit3d import simulate_unit_3d
 
     g = UnitGeometry(L=L, h=0.04068, t=0.5e-3, w=5e-3, b=5e-3)
@@ -79,7 +80,7 @@ def unit3d(plates=("elastic", "stiff"), meshes=(41, 81, 121, 161, 241)):
     for plate in plates:
         for n in meshes:
             t0 = time.process_time()
-            r = simulate_unit_3d(g, nodes=n, end_plate=plate)
+            r = simulate_unit_3d(g, nodes=n, end_plate=plate, **options)
             _row(plate, n, r.status, repr(r.theta_deg), repr(r.theta_released_deg),
                  repr(r.F_cr), round(time.process_time() - t0, 3))
 
@@ -96,6 +97,8 @@ if __name__ == "__main__":
         convergence(*(_ints(a) for a in rest[:1]))
     elif what == "unit3d":
         plates = tuple(rest[0].split(",")) if rest else ("elastic", "stiff")
-        unit3d(plates, *(_ints(a) for a in rest[1:2]))
+        options = dict(a.split("=", 1) for a in rest[2:])
+        options = {k: int(v) if v.isdigit() else v for k, v in options.items()}
+        unit3d(plates, *(_ints(a) for a in rest[1:2]), **options)
     else:
         raise SystemExit(f"unknown study {what!r}: triangle, convergence or unit3d")

@@ -48,6 +48,7 @@ from snapmorph.units.frame3d import (
     UnitGeometry,
     arch_nodes_x,
 )
+from snapmorph.units.junctions3d import rigid_junction
 from snapmorph.units.planar import check_flag, check_steps
 from snapmorph.units.push3d import (level, push_through, record_release, relax_released,
                                     transfer_state)
@@ -80,6 +81,14 @@ class Unit3DModel:
     rail_right: np.ndarray  # y = +1.5 w
     arch: np.ndarray
     supports: np.ndarray
+    junctions: list = field(default_factory=list)  # node lists joined at one node frame
+
+    def to_structure(self):
+        """The `solver.Structure3D` of the mesh with its junctions (`units.junctions3d`)."""
+        st = self.mesh.to_structure()
+        for nodes in self.junctions:
+            rigid_junction(st, nodes)
+        return st
 
 
 def _real(name, value, unit, meaning):
@@ -133,6 +142,8 @@ def build_unit_mesh_3d(
     bond: str = "joint",
     brace_width: float | None = None,
     end_plate: str = "elastic",
+    joints: str = "bond",
+    foot_refinement: int = 1,
 ) -> Unit3DModel:
     """Mesh the 3-D unit (no solver needed): frame base, arch, bonds, rollers, actuator.
 
@@ -143,7 +154,12 @@ def build_unit_mesh_3d(
     ``brace_width``: width (m) of the in-plane braces of each end plate (default b + w, the
     plate's length: the end plate is then in-plane rigid next to the rest); ``end_plate``:
     "elastic" (the sheet's own stiffness) or "stiff" (cross bars of 1e4 x E: the end
-    plates keep their shape across the width, as the planar model assumes).
+    plates keep their shape across the width, as the planar model assumes);
+    ``joints``: how rods crossing at a node are joined: "bond" (`Mesh3D.bond`: pairs of edges
+    in both orders) or "node" (one node frame per junction, `units.junctions3d`, listed in
+    the model's ``junctions``; docs/unit3d.md); ``foot_refinement``: the edges next to the
+    arch feet x0 are this many times shorter than the spacing, doubling in length away from
+    them (1: the uniform mesh).
     Returns a `Unit3DModel` whose ``structure`` is None.
     """
     if not isinstance(g, UnitGeometry):
@@ -161,6 +177,13 @@ def build_unit_mesh_3d(
                          f"in [1, 64]; got {bar_divisions!r}")
     if bond not in ("joint", "tie"):
         raise ValueError(f"bond must be 'joint' or 'tie'; got {bond!r}")
+    if joints not in ("bond", "node"):
+        raise ValueError(f"joints (how rods crossing at a node are joined) must be 'bond' or "
+                         f"'node'; got {joints!r}")
+    if isinstance(foot_refinement, bool) or not isinstance(foot_refinement, (int, np.integer)) \
+            or not 1 <= foot_refinement <= 64:
+        raise ValueError(f"foot_refinement (edges at the arch feet this many times shorter than "
+                         f"the spacing) must be an integer in [1, 64]; got {foot_refinement!r}")
     L, w, t, x0 = g.L, g.w, g.t, g.flat_length
     if end_plate not in ("elastic", "stiff"):
         raise ValueError(f"end_plate must be 'elastic' or 'stiff'; got {end_plate!r}")
@@ -178,7 +201,7 @@ def build_unit_mesh_3d(
                          f"got {brace_width!r}")
     spacing = L / (nodes - 1)
     sup = SUPPORT_OFFSET * L
-    he = 0.5 * min(spacing, 0.5 * x0, 0.25 * g.arch_span)
+    he = 0.5 * min(spacing / foot_refinement, 0.5 * x0, 0.25 * g.arch_span)
     if abs(sup - x0) < he * (1 + 1e-9):  # as the planar unit: keep the roller at 0.03 L
         he = max(0.5 * abs(sup - x0), 0.05 * spacing)
         if abs(sup - x0) < he * (1 + 1e-9):
@@ -186,7 +209,11 @@ def build_unit_mesh_3d(
     breaks = np.array([0.0, sup, x0 - he, x0 + he, 0.5 * L, L - x0 - he, L - x0 + he,
                        L - sup, L])
     breaks = np.unique(np.round(breaks / L, 14)) * L
-    base_x = segment_points(breaks, spacing)
+    if foot_refinement == 1:
+        base_x = segment_points(breaks, spacing)
+    else:  # edges of 2 he next to the feet, growing twice as long per edge away from them
+        base_x = graded_points(breaks, spacing, [x0 - he, x0 + he, L - x0 - he, L - x0 + he],
+                               2 * he)
     # exactly mirror-symmetric, so that mirrored nodes of different rods coincide bit for bit
     left = base_x[base_x <= 0.5 * L * (1 + 1e-12)]
     base_x = np.concatenate([left, L - left[::-1][1:]])
@@ -216,6 +243,18 @@ def build_unit_mesh_3d(
     mids = np.concatenate([[0.0], 0.5 * (end_x[1:] + end_x[:-1]), [end_x[-1]]])
     bar_w = np.minimum(mids[1:], x0) - np.minimum(mids[:-1], x0)
     support_nodes = []
+    # joints="bond": every crossing joined by pairs of edges in both orders (Mesh3D.bond);
+    # "node": the rods meeting at a node hang off one node frame (units.junctions3d), which
+    # counts no half edge twice and adds no stiffness to a rod running through the node
+    hubs = None if joints == "bond" else {}
+
+    def join(through, *others):
+        if hubs is None:
+            for o in others:
+                mesh.bond(through, o)
+        else:
+            hubs.setdefault(int(through), []).extend(int(o) for o in others)
+
     for side, (rail_a, rail_b, centre) in (("left", (rail_l, rail_r, c_left)),
                                            ("right", (rail_l[::-1], rail_r[::-1], c_right[::-1]))):
         for k in range(n_end - 1):  # no bar half an edge past x0: the plate ends at x0
@@ -230,11 +269,11 @@ def build_unit_mesh_3d(
                 halves.append(mesh.add_rod(f"bar_{side}_{k}_{tag}", pts, bar_w[k], t,
                                            E_factor=bar_E, plate=True))
             minus, plus = halves
-            mesh.bond(centre[k], minus[0])
-            mesh.bond(centre[k], plus[0])
-            mesh.bond(minus[0], plus[0])  # the bar continues straight across the centre
-            mesh.bond(rail_a[k], minus[-1])
-            mesh.bond(rail_b[k], plus[-1])
+            join(centre[k], minus[0], plus[0])
+            if hubs is None:
+                mesh.bond(minus[0], plus[0])  # the bar continues straight across the centre
+            join(rail_a[k], minus[-1])
+            join(rail_b[k], plus[-1])
             if abs(end_x[k] - sup) < 1e-9 * L:
                 support_nodes += [int(n) for n in minus] + [int(n) for n in plus]
                 support_nodes += [int(rail_a[k]), int(rail_b[k]), int(centre[k])]
@@ -250,7 +289,7 @@ def build_unit_mesh_3d(
                              (centre[0], rail_a[far]), (centre[0], rail_b[far])):
             pts = mesh.positions[[int(outer), int(inner)]]
             brace = mesh.add_rod(f"brace_{side}_{len(mesh.rods)}", pts, brace_width, t)
-            mesh.bond(outer, brace[0])
+            join(outer, brace[0])
             mesh.ties.append((int(inner), int(brace[1])))
 
     # the arch: flat on the end regions up to half an edge past x0, raised in between
@@ -279,10 +318,14 @@ def build_unit_mesh_3d(
         inner = 1 <= k <= n_bond - 2
         for a_, b_ in ((arch[k], c_left[k]), (arch[-1 - k], c_right[-1 - k])):
             if inner and (bond == "joint" or k in (1, n_bond - 2)):
-                mesh.bond(a_, b_)
+                if hubs is None:
+                    mesh.bond(a_, b_)
+                else:
+                    join(b_, a_)
             else:
                 mesh.ties.append((int(a_), int(b_)))
 
+    junctions = [[through] + others for through, others in (hubs or {}).items()]
     offset = n_end - 1
     push = int(arch[offset + act])
     head = np.zeros(0, dtype=np.int64)
@@ -313,13 +356,36 @@ def build_unit_mesh_3d(
                        centre_right=c_right, supports=np.array(support_nodes, dtype=np.int64),
                        actuator=arch[offset + lo: offset + hi].copy(), actuator_head=head)
     return Unit3DModel(mesh, None, push, rail_l, rail_r, arch,
-                       np.array(support_nodes, dtype=np.int64))
+                       np.array(support_nodes, dtype=np.int64), junctions)
+
+
+def graded_points(breaks, spacing, feet, fine, ratio=2.0):
+    """Points along sorted ``breaks`` (every break kept) as `units.shapes.segment_points`,
+    edges no longer than ``spacing``, except in the intervals that end at one of ``feet``:
+    there the edges start at ``fine`` next to the foot and grow by ``ratio`` up to
+    ``spacing``."""
+    pts = [float(breaks[0])]
+    feet = np.asarray(feet, dtype=float)
+    for a, b in zip(breaks[:-1], breaks[1:]):
+        da, db = np.min(np.abs(feet - a)), np.min(np.abs(feet - b))
+        if fine >= spacing or min(da, db) > 1e-9 * spacing or b - a <= fine * (1 + 1e-9):
+            pts.extend(segment_points(np.array([a, b]), spacing)[1:])
+            continue
+        lengths = []
+        while sum(lengths) < (b - a) * (1 - 1e-9):
+            lengths.append(min(fine * ratio ** len(lengths), spacing))
+        lengths = np.array(lengths) * ((b - a) / sum(lengths))
+        if db < da:
+            lengths = lengths[::-1]
+        pts.extend(a + np.cumsum(lengths)[:-1])
+        pts.append(float(b))
+    return np.array(pts)
 
 
 def build_unit_3d(g: UnitGeometry, nodes: int = DEFAULT_NODES_3D, **options) -> Unit3DModel:
     """Mesh the 3-D unit and build its `solver.Structure3D` (options: `build_unit_mesh_3d`)."""
     model = build_unit_mesh_3d(g, nodes=nodes, **options)
-    model.structure = model.mesh.to_structure()
+    model.structure = model.to_structure()
     return model
 
 
@@ -450,7 +516,7 @@ def released_state_3d(g, model: Unit3DModel, q_iii, build_options: dict):
     load. Returns (self_standing, metrics dict or None, negative eigenvalues or None, why
     not self-standing ("" when it is))."""
     free = build_unit_mesh_3d(g, actuator=False, supports=False, **build_options)
-    st = free.mesh.to_structure()
+    st = free.to_structure()
     for node, comps in released_supports(free):
         st.fix(node, comps)
     q0 = transfer_state(model.mesh, q_iii, free.mesh, st)
@@ -490,6 +556,8 @@ def simulate_unit_3d(
     brace_width: float | None = None,
     end_plate: str = "elastic",
     check_self_standing: bool = True,
+    joints: str = "bond",
+    foot_refinement: int = 1,
 ) -> Unit3DResult:
     """Push the 3-D unit's actuator down until it snaps; the planar metrics plus arch tilt,
     rail twist and sideways motion of the arch (see `Unit3DResult`).
@@ -497,7 +565,8 @@ def simulate_unit_3d(
     ``nodes``: resolution (nodes along a rail; None = DEFAULT_NODES_3D); ``steps``: first
     step as a fraction of 3 h; ``critical``: detect bifurcations on the path (slower);
     ``check_self_standing``: also release the bistable unit's state (iii) (actuator and
-    rollers removed) and report ``released`` and ``self_standing`` (as the planar unit).
+    rollers removed) and report ``released`` and ``self_standing`` (as the planar unit);
+    ``joints``, ``foot_refinement``: the mesh options of `build_unit_mesh_3d` (issue 25).
     Arguments are validated (ValueError naming the parameter); after that it never raises
     for a unit that can be built: failures come back in ``status`` and ``reason``.
     """
@@ -508,7 +577,8 @@ def simulate_unit_3d(
     t0 = time.perf_counter()
     options = dict(nodes=nodes, tilt_deg=tilt_deg, apex_offset=apex_offset,
                    actuator_offset=actuator_offset, nu=nu, bar_divisions=bar_divisions,
-                   bond=bond, brace_width=brace_width, end_plate=end_plate)
+                   bond=bond, brace_width=brace_width, end_plate=end_plate,
+                   joints=joints, foot_refinement=foot_refinement)
     model = build_unit_3d(g, **options)
     imperfection = {"tilt_deg": float(tilt_deg), "apex_offset": float(apex_offset),
                     "actuator_offset": float(actuator_offset)}
