@@ -143,6 +143,9 @@ class SheetStep:
     reason: str = ""
     seconds: float = NAN
     pushed: np.ndarray | None = None
+    #: False when the release found no equilibrium and ``state`` is the pushed state it
+    #: started from: the orders' later steps are then not run (`_not_run`)
+    equilibrium: bool = True
 
     def __repr__(self):
         return (f"SheetStep(cell={self.cell}, F_cr={self.F_cr:.4g} N, push={self.push_status!r}, "
@@ -213,10 +216,23 @@ def simulate_sheet(sheet: SheetModel, order, boundary: str = "free", steps: int 
     q = np.array(released.initial_state() if start is None else start, dtype=float)
     result = SheetResult(sheet, boundary, order)
     for c in order:
-        result.steps.append(_step(sheet, boundary, released, c, q, steps))
+        prev = result.steps[-1] if result.steps else None
+        result.steps.append(_not_run(c, prev) if prev is not None and not prev.equilibrium
+                            else _step(sheet, boundary, released, c, q, steps))
         q = result.steps[-1].state
     result.solve_time = time.perf_counter() - t0
     return result
+
+
+def _not_run(cell, prev):
+    """The step of ``cell`` after ``prev``, whose release found no equilibrium: not pushed
+    (a push needs an equilibrium to start from; from the pushed state it fails after a long
+    descent), a failure that carries ``prev``'s state on."""
+    why = (f"not converged: not run: the release of cell {prev.cell} before it found no "
+           f"equilibrium")
+    return SheetStep(cell, np.zeros(0), np.zeros(0), NAN, why, prev.snapped.copy(), False,
+                     None, False, prev.positions, prev.state, prev.apex_heights, 0.0, why,
+                     0.0, prev.pushed, equilibrium=False)
 
 
 def _step(sheet, boundary, released, cell, q, steps):
@@ -238,6 +254,7 @@ def _step(sheet, boundary, released, cell, q, steps):
     if pushed is None:
         pushed = q
     qr, neg, moved, why, first = relax_released(released, pushed, RELEASE_MAX_ITER)
+    equilibrium = qr is not None
     if qr is None:
         qr = np.asarray(pushed, dtype=float)
     pos = np.array(released.positions_of(qr))
@@ -248,7 +265,7 @@ def _step(sheet, boundary, released, cell, q, steps):
     return SheetStep(cell, d, F, float(out.F_cr), out.status, heights < 0.0,
                      neg == 0, neg, first is None or first > 0, pos, np.array(qr), heights,
                      moved, why, time.perf_counter() - t0,
-                     np.array(released.positions_of(pushed)))
+                     np.array(released.positions_of(pushed)), equilibrium)
 
 
 # ---------------------------------------------------------------------------- memory
@@ -349,7 +366,9 @@ def _run_orders(sheet, runs, boundary, steps, progress=None):
         for k, c in enumerate(order):
             key = tuple(order[: k + 1])
             if key not in done:
-                done[key] = _step(sheet, boundary, released, c, q, steps)
+                prev = result.steps[-1] if result.steps else None
+                done[key] = (_not_run(c, prev) if prev is not None and not prev.equilibrium
+                             else _step(sheet, boundary, released, c, q, steps))
             result.steps.append(done[key])
             q = done[key].state
         result.solve_time = time.perf_counter() - t0

@@ -219,3 +219,29 @@ def test_a_step_cut_short_or_a_failed_release_is_not_complete():
     assert r.complete
     assert not dataclasses.replace(r, steps=[step("ok"), step("not converged: x")]).complete
     assert not SheetResult(None, "free", []).complete
+
+
+@pytest.mark.slow
+def test_steps_after_a_release_without_equilibrium_are_not_run(monkeypatch):
+    """A release that finds no equilibrium leaves the pushed state, which no later push can
+    start from: the order's later steps are recorded as not run (a failure, not complete),
+    carrying that state on, in `simulate_sheet` and in `explore_orders` alike."""
+    import snapmorph.units.sheet as sheet_module
+
+    calls = []
+
+    def no_release(st, q, max_iter=400):
+        calls.append(1)
+        return None, None, float("nan"), "no stable equilibrium found (test)", None
+
+    monkeypatch.setattr(sheet_module, "relax_released", no_release)
+    sheet = build_sheet(G, "square", (1, 2), nodes=11)
+    r = simulate_sheet(sheet, [0, 1])
+    first, second = r.steps
+    assert not first.equilibrium and not first.complete
+    assert second.push_status.startswith("not converged: not run")
+    assert not second.complete and not r.complete and not second.equilibrium
+    assert np.array_equal(second.state, first.state) and len(calls) == 1
+    out = explore_orders(sheet, [0, 1], orders=[[0, 1]])
+    assert out["results"][0].steps[1].push_status.startswith("not converged: not run")
+    assert len(calls) == 2 and out["distinct_complete"] == 0
