@@ -3,8 +3,9 @@ t = 0.5 mm, h = 20 mm, w = 5 mm, L = 100 mm, have 2³ = 8 stable states.
 
     python examples/three_units_fk.py [--map PATH] [--simulate] [--out DIR]
 
-Unit shapes come from the design map (built at b/L = 0, as the paper's parametric study), or
-with --simulate from the unit solver directly, with b = w as the paper's specimens.
+Unit shapes come from the design map, read at b/L = 0 as the paper's parametric study (the
+default map also holds b/L = 0.05, the specimens' b = w), or with --simulate from the unit
+solver directly, with b = w as the paper's specimens.
 """
 
 from __future__ import annotations
