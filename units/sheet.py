@@ -216,12 +216,20 @@ def simulate_sheet(sheet: SheetModel, order, boundary: str = "free", steps: int 
     q = np.array(released.initial_state() if start is None else start, dtype=float)
     result = SheetResult(sheet, boundary, order)
     for c in order:
-        prev = result.steps[-1] if result.steps else None
-        result.steps.append(_not_run(c, prev) if prev is not None and not prev.equilibrium
-                            else _step(sheet, boundary, released, c, q, steps))
+        result.steps.append(_next_step(sheet, boundary, released, c, result, q, steps))
         q = result.steps[-1].state
     result.solve_time = time.perf_counter() - t0
     return result
+
+
+def _next_step(sheet, boundary, released, cell, result, q, steps):
+    """The step of ``cell`` after the steps of ``result`` so far, from their state ``q``:
+    pushed and released (`_step`), or not run when the last release found no equilibrium
+    (`_not_run`)."""
+    prev = result.steps[-1] if result.steps else None
+    if prev is not None and not prev.equilibrium:
+        return _not_run(cell, prev)
+    return _step(sheet, boundary, released, cell, q, steps)
 
 
 def _not_run(cell, prev):
@@ -366,9 +374,7 @@ def _run_orders(sheet, runs, boundary, steps, progress=None):
         for k, c in enumerate(order):
             key = tuple(order[: k + 1])
             if key not in done:
-                prev = result.steps[-1] if result.steps else None
-                done[key] = (_not_run(c, prev) if prev is not None and not prev.equilibrium
-                             else _step(sheet, boundary, released, c, q, steps))
+                done[key] = _next_step(sheet, boundary, released, c, result, q, steps)
             result.steps.append(done[key])
             q = done[key].state
         result.solve_time = time.perf_counter() - t0
