@@ -8,6 +8,9 @@ orders of one set of cells).
                      [shape RxC] [out.json] [figure.png] ["o1;o2" orders first]
                      # e.g. hexagon 20 21 1,2,3,4,5 2x3 hex.json hex.png 1,2,3,4,5
     .venv/bin/python -m studies.sheets coupling [order] [nodes]  # fast prediction vs sheet
+
+SHEET_PROTOCOL=rig (environment) pushes the cells with the displacement-controlled rig
+(`units.sheet_rig`) instead of the load-controlled protocol (the default, "mgdc").
 """
 
 from __future__ import annotations
@@ -54,7 +57,7 @@ def final_shape(nodes, order, shape=(3, 3), tiling="square"):
 
     g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
     sheet = build_sheet(g, tiling, shape, nodes=nodes)
-    r = simulate_sheet(sheet, order)
+    r = simulate_sheet(sheet, order, protocol=os.environ.get("SHEET_PROTOCOL", "mgdc"))
     f = r.final
     curv = np.array([edge_metrics(f.positions[e])["curvature"] for e in sheet.edge_nodes])
     return f.apex_heights, curv, r
@@ -116,7 +119,10 @@ def memory(tiling="square", n_orders=20, nodes=21, cells=(0, 2, 4, 6, 8), shape=
 
     include = [o for o in include if sorted(o) == sorted(cells)]
     runs = branching_orders(cells, n_orders, include=include)
-    res = explore_orders(sheet, cells, orders=runs, progress=progress)
+    protocol = os.environ.get("SHEET_PROTOCOL", "mgdc")
+    print(f"{tiling} {shape[0]}x{shape[1]}, cells {cells}: pushes by protocol {protocol!r}",
+          flush=True)
+    res = explore_orders(sheet, cells, orders=runs, progress=progress, protocol=protocol)
     seconds = time.perf_counter() - t0
     print(f"{tiling} {shape[0]}x{shape[1]}, cells {cells}, {len(res['orders'])} orders, "
           f"{nodes} nodes: {seconds:.0f} s ({res['pushes']} pushes); {len(res['groups'])} "
@@ -142,6 +148,7 @@ def memory(tiling="square", n_orders=20, nodes=21, cells=(0, 2, 4, 6, 8), shape=
                        "F_cr_N": [float(s.F_cr) for s in r.steps],
                        "apex_heights_mm": np.round(1e3 * f.apex_heights, 4).tolist()})
     record = {"tiling": tiling, "shape": list(shape), "nodes": nodes, "cells": cells,
+              "protocol": protocol,
               "geometry_mm": {"L": 100, "h": 40, "t": 0.5, "w": 5}, "boundary": "free",
               "tolerance_mm": 1e3 * 0.01 * g.L, "seconds": seconds, "pushes": res["pushes"],
               "finals": finals, "distances_mm": np.round(1e3 * d, 4).tolist(),

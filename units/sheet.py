@@ -34,15 +34,20 @@ import numpy as np
 
 from snapmorph.units.frame3d import PETG_NU, UnitGeometry
 from snapmorph.units.push3d import path_states, push_through, relax_released
+from snapmorph.units.sheet_rig import release_descent, rig_push
 from snapmorph.units.status import answered
 from snapmorph.units.sheet_mesh import TILINGS, SheetModel, build_sheet_mesh, check_cells
 
 __all__ = ["BOUNDARIES", "DEFAULT_NODES_SHEET", "SheetStep", "SheetResult", "build_sheet",
            "simulate_sheet", "apex_heights", "sheet_structure", "explore_orders",
-           "shape_distance", "TILINGS", "check_cells", "edge_curvatures",
+           "shape_distance", "PROTOCOLS", "TILINGS", "check_cells", "edge_curvatures",
            "predict_edge_curvatures", "coupling_error"]
 
 BOUNDARIES = ("free", "clamped-edge")
+#: how a cell is pushed: "mgdc", the unit's load-controlled push-through protocol
+#: (`units.push3d`); "rig", a displacement-controlled rig that settles into the stable held
+#: state at every increment and jumps where the held path folds (`units.sheet_rig`)
+PROTOCOLS = ("mgdc", "rig")
 #: default resolution of a sheet's cells: nodes along a side (the unit's is 41)
 DEFAULT_NODES_SHEET = 21
 #: the step cap of a cell's push (MGDC path steps): a push that snaps takes 50-100 steps
@@ -205,31 +210,41 @@ def check_order(sheet: SheetModel, order) -> list:
 
 
 def simulate_sheet(sheet: SheetModel, order, boundary: str = "free", steps: int = 60,
-                   start=None) -> SheetResult:
+                   start=None, protocol: str = "mgdc") -> SheetResult:
     """Push the cells of ``order`` one at a time (actuator on, then released; module
-    docstring) from ``start`` (a full state of the released sheet; None: as made).
-    Returns a `SheetResult`; failures of a push come back in its step's ``push_status``."""
+    docstring) from ``start`` (a full state of the released sheet; None: as made), by
+    ``protocol`` (`PROTOCOLS`; ``steps``: the MGDC path's first-step count, or the rig's
+    increments over 3 h). Returns a `SheetResult`; failures of a push come back in its
+    step's ``push_status``."""
     check_boundary(boundary)
+    check_protocol(protocol)
     order = check_order(sheet, order)
     t0 = time.perf_counter()
     released = sheet_structure(sheet, boundary)
     q = np.array(released.initial_state() if start is None else start, dtype=float)
     result = SheetResult(sheet, boundary, order)
     for c in order:
-        result.steps.append(_next_step(sheet, boundary, released, c, result, q, steps))
+        result.steps.append(_next_step(sheet, boundary, released, c, result, q,
+                                       (steps, protocol)))
         q = result.steps[-1].state
     result.solve_time = time.perf_counter() - t0
     return result
 
 
-def _next_step(sheet, boundary, released, cell, result, q, steps):
+def check_protocol(protocol):
+    if protocol not in PROTOCOLS:
+        raise ValueError(f"protocol (how a cell is pushed) must be one of {PROTOCOLS}; "
+                         f"got {protocol!r}")
+
+
+def _next_step(sheet, boundary, released, cell, result, q, push):
     """The step of ``cell`` after the steps of ``result`` so far, from their state ``q``:
-    pushed and released (`_step`), or not run when the last release found no equilibrium
-    (`_not_run`)."""
+    pushed and released (`_step`; ``push``: (steps, protocol)), or not run when the last
+    release found no equilibrium (`_not_run`)."""
     prev = result.steps[-1] if result.steps else None
     if prev is not None and not prev.equilibrium:
         return _not_run(cell, prev)
-    return _step(sheet, boundary, released, cell, q, steps)
+    return _step(sheet, boundary, released, cell, q, *push)
 
 
 def _not_run(cell, prev):
@@ -243,8 +258,9 @@ def _not_run(cell, prev):
                      0.0, prev.pushed, equilibrium=False)
 
 
-def _step(sheet, boundary, released, cell, q, steps):
-    """Push ``cell`` from the released state ``q`` and release it: a `SheetStep`."""
+def _step(sheet, boundary, released, cell, q, steps, protocol="mgdc"):
+    """Push ``cell`` from the released state ``q`` by ``protocol`` and release it: a
+    `SheetStep`."""
     t0 = time.perf_counter()
     g = sheet.geometry
     st = sheet_structure(sheet, boundary, cell)
@@ -254,14 +270,19 @@ def _step(sheet, boundary, released, cell, q, steps):
     # now (an earlier step may have carried it down by more than 3 h: a free sheet curls)
     z = int(released.node_dofs(int(sheet.apex[cell]))[2])
     travel = 3.0 * g.h + (0.0 if fresh else float(q0[z] - q[z]))
-    out = push_through(st, int(sheet.apex[cell]), travel, steps=int(steps),
-                       start=None if fresh else q, max_steps=PUSH_MAX_STEPS)
+    if protocol == "rig":
+        d_start = float(q0[z] - q[z])
+        out = rig_push(st, int(sheet.apex[cell]), q, d_start, travel, int(steps))
+    else:
+        out = push_through(st, int(sheet.apex[cell]), travel, steps=int(steps),
+                           start=None if fresh else q, max_steps=PUSH_MAX_STEPS)
     pushed = out.full_states.get("iii")
     if pushed is None and out.path is not None and len(out.path.positions):
         pushed = path_states(st, out.path)[-1]
     if pushed is None:
         pushed = q
-    qr, neg, moved, why, first = relax_released(released, pushed, RELEASE_MAX_ITER)
+    rig = {"descent": release_descent} if protocol == "rig" else {}
+    qr, neg, moved, why, first = relax_released(released, pushed, RELEASE_MAX_ITER, **rig)
     equilibrium = qr is not None
     if qr is None:
         qr = np.asarray(pushed, dtype=float)
@@ -310,11 +331,12 @@ def _orders(cells, orders, seed):
 
 def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
                    tol: float | None = None, seed: int = 0, steps: int = 60,
-                   progress=None) -> dict:
+                   progress=None, protocol: str = "mgdc") -> dict:
     """Snap the same set of ``cells`` in many ``orders`` (a list of permutations, or a
     count: that many distinct ones, `_orders`) and group the final states by
     `shape_distance` (two finals are one shape when within ``tol``, default L / 100).
     ``progress``: None or a callable given (index, order, `SheetResult`) after every order.
+    ``steps``, ``protocol``: as for `simulate_sheet`.
 
     Returns {"orders": the orders run, "results": their `SheetResult`s, "groups": [{"orders":
     indices into "orders", "snapped": cells snapped in the shape, "stable": bool,
@@ -324,6 +346,7 @@ def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
     one complete order (the others rest on a push cut short or a failed release: not shown
     to be the sheet's), "distances": (n, n) m between the finals, "pushes": the pushes run
     (a prefix several orders share is pushed once)}."""
+    check_protocol(protocol)
     cells = check_order(sheet, cells)
     if len(set(cells)) != len(cells):
         raise ValueError(f"cells must be distinct cell indices; got {cells!r}")
@@ -332,7 +355,7 @@ def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
     for o in runs:
         if sorted(o) != sorted(cells):
             raise ValueError(f"every order must be a permutation of cells {cells}; got {o}")
-    results, pushes = _run_orders(sheet, runs, boundary, steps, progress)
+    results, pushes = _run_orders(sheet, runs, boundary, (steps, protocol), progress)
     finals = [r.final.positions for r in results]
     n = len(finals)
     dist = np.zeros((n, n))
@@ -358,7 +381,7 @@ def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
             "distinct_complete": complete, "distances": dist, "pushes": pushes}
 
 
-def _run_orders(sheet, runs, boundary, steps, progress=None):
+def _run_orders(sheet, runs, boundary, push, progress=None):
     """The `SheetResult` of every order of ``runs``, as `simulate_sheet` gives it, with every
     prefix that several orders share pushed once (a step depends only on the state before
     it and the cell pushed: the orders' steps are those objects, shared). Returns (results,
@@ -374,7 +397,7 @@ def _run_orders(sheet, runs, boundary, steps, progress=None):
         for k, c in enumerate(order):
             key = tuple(order[: k + 1])
             if key not in done:
-                done[key] = _next_step(sheet, boundary, released, c, result, q, steps)
+                done[key] = _next_step(sheet, boundary, released, c, result, q, push)
             result.steps.append(done[key])
             q = done[key].state
         result.solve_time = time.perf_counter() - t0

@@ -1,0 +1,117 @@
+"""The displacement-controlled rig of a sheet's cell (`units.sheet_rig`, `protocol="rig"`):
+its energy descent, its pushes against the load-controlled protocol on a single cell, the
+stability of what it records, and the shifted inverse iteration of `units.push3d` that finds
+a negative mode where plain inverse iteration meets a positive eigenvalue."""
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+from snapmorph.solver.states import DisplacementProbe
+from snapmorph.units import push3d
+from snapmorph.units.frame3d import UnitGeometry
+from snapmorph.units.sheet import (PROTOCOLS, build_sheet, shape_distance, sheet_structure,
+                                   simulate_sheet)
+from snapmorph.units.sheet_rig import DOWN, canonical, minimize_energy, rig_push
+
+G = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
+
+
+@pytest.fixture(scope="module")
+def single():
+    return build_sheet(G, "square", (1, 1))
+
+
+@pytest.fixture(scope="module")
+def both(single):
+    return {p: simulate_sheet(single, [0], protocol=p) for p in PROTOCOLS}
+
+
+def test_descent_returns_to_the_stress_free_state_from_a_perturbed_one(single):
+    st = sheet_structure(single)
+    system = st.reduced_system()
+    q0 = np.array(st.initial_state(), dtype=float)
+    q = q0.copy()
+    system.increment(q, np.random.default_rng(3).standard_normal(system.n), 2e-4)
+    assert np.max(np.abs(q - q0)) > 1e-4
+    length, fscale = st.scales()
+    system.reset_frames()
+    it = minimize_energy(system, q, 1e-9 * fscale, 1e-11 * length)
+    assert 0 < it < 100
+    q = canonical(system, q)
+    pos, pos0 = st.positions_of(q), st.positions_of(q0)
+    assert np.max(np.abs(pos - pos0)) < 1e-9 * length
+    system.reset_frames()
+    system.evaluate(q)
+    assert system.factor() and system.negative_eigenvalues == 0
+
+
+def test_rig_push_of_one_cell_equals_the_load_controlled_protocol(both):
+    mgdc, rig = both["mgdc"].final, both["rig"].final
+    assert mgdc.push_status == "ok" and rig.push_status == "ok"
+    # F_cr: the path's limit point (MGDC) against the rig's largest force (2 mm samples,
+    # parabola at the top): 1.2471 against 1.2468 N measured
+    assert rig.F_cr == pytest.approx(mgdc.F_cr, rel=1e-3)
+    assert rig.snapped.tolist() == mgdc.snapped.tolist() == [True]
+    assert rig.stable and mgdc.stable
+    assert np.max(np.abs(rig.apex_heights - mgdc.apex_heights)) < 1e-4
+    # the same released shape (up to the placement a free sheet's holds leave it)
+    assert shape_distance(rig.positions, mgdc.positions) < 1e-4
+
+
+def test_rig_records_stable_held_states_and_its_end_state_is_state_iii(single):
+    st = sheet_structure(single, "free", 0)
+    q = np.array(st.initial_state(), dtype=float)
+    out = rig_push(st, int(single.apex[0]), q, 0.0, 3.0 * G.h, 60)
+    assert out.status == "ok" and not out.jumps
+    d, F = out.curve
+    assert np.all(np.diff(d) > 0)
+    i = int(np.argmax(F))
+    assert 0 < i < len(F) - 1 and F[-2] < 0.0 <= F[-1]  # through (ii), back at (iii)
+    assert out.F_cr >= F[i] and out.F_cr - F[i] < 0.01 * F[i]
+    probe = DisplacementProbe(st, int(single.apex[0]), DOWN)
+    pos, F_end, neg = probe.solve(out.full_states["iii"], float(d[-1]))
+    assert neg == 0  # stable with the apex held, checked by a fresh probe's Newton
+    assert F_end == pytest.approx(F[-1], abs=1e-6 * max(1.0, abs(F[-1])))
+    assert np.max(np.abs(pos - st.positions_of(out.full_states["iii"]))) < 1e-8
+
+
+def test_protocol_is_checked(single):
+    with pytest.raises(ValueError, match="protocol"):
+        simulate_sheet(single, [0], protocol="force")
+
+
+class _DenseSystem:
+    """A symmetric K as a system: lower band storage, factor with inertia, solve."""
+
+    def __init__(self, K):
+        self.K, self.n = np.asarray(K, dtype=float), len(K)
+        self.band = np.zeros((self.n, self.n))
+
+    def evaluate(self, q):
+        for k in range(self.n):
+            self.band[k, : self.n - k] = np.diag(self.K, -k)
+        return 0.0
+
+    def factor(self):
+        A = np.zeros((self.n, self.n))
+        for k in range(self.n):
+            A += np.diag(self.band[k, : self.n - k], -k)
+            if k:
+                A += np.diag(self.band[k, : self.n - k], k)
+        self._A = A
+        self.negative_eigenvalues = int(np.sum(np.linalg.eigvalsh(A) < 0.0))
+        return True
+
+    def solve(self, b):
+        return scipy.linalg.solve(self._A, b)
+
+
+def test_negative_mode_where_the_eigenvalue_nearest_zero_is_positive():
+    rng = np.random.default_rng(5)
+    Q = np.linalg.qr(rng.standard_normal((6, 6)))[0]
+    lam = np.array([-4.0, 0.05, 1.0, 2.0, 3.0, 5.0])  # inverse iteration finds 0.05 first
+    K = (Q * lam) @ Q.T
+    v = push3d._negative_mode(_DenseSystem(K), None)
+    assert float(v @ K @ v) / float(v @ v) == pytest.approx(-4.0, rel=1e-6)
+    assert abs(float(v @ Q[:, 0])) == pytest.approx(np.linalg.norm(v), rel=1e-6)
