@@ -103,11 +103,30 @@ def pair_constants(rows, K):
     return tuple(float(v) for v in np.maximum(np.linalg.solve(A, b), 0.0))
 
 
-def rigid_junction(structure, nodes):
+def rigid_junction(structure, nodes, pairs=None):
     """Join the coincident ``nodes`` (of any rods, each an end or an interior node) rigidly at
     one node frame: positions shared, and every two edges touching the node coupled by the
     pair of the star-mesh transform (module docstring), which replaces the rods' own node
-    pairs there. Returns the number of pairs added."""
+    pairs there. ``pairs``: the junction's pairs as `junction_pairs` returned them for a
+    structure with the same rods at these nodes (the fit is then not repeated). Returns the
+    number of pairs added."""
+    st = structure
+    nodes = [st.check_node(n, "junction node") for n in nodes]
+    if pairs is None:
+        pairs = junction_pairs(st, nodes)
+    for n in nodes:
+        st._pairs.pop(("node", n), None)
+    st._pairs.update(pairs)
+    for n in nodes[1:]:
+        st._merges.append((nodes[0], n))
+    st._cache = None
+    return len(pairs)
+
+
+def junction_pairs(structure, nodes):
+    """{key: pair} of the rigid junction of the coincident ``nodes`` (`rigid_junction`), in
+    `Structure3D`'s pair layout, without adding them: they depend only on the rods' stress-free
+    frames and stiffnesses at the node, so one fit serves every structure of the same mesh."""
     st = structure
     nodes = [st.check_node(n, "junction node") for n in nodes]
     if len(set(nodes)) != len(nodes) or len(nodes) < 1:
@@ -121,9 +140,7 @@ def rigid_junction(structure, nodes):
     arms = junction_arms(st, nodes)
     frames = [st._frame(rod, j) for rod, j, _ in arms]
     K = star_mesh_stiffness([arm_stiffness(rod, j, f) for (rod, j, _), f in zip(arms, frames)])
-    for n in nodes:
-        st._pairs.pop(("node", n), None)
-    added = 0
+    pairs = {}
     for p in range(len(arms)):
         for q in range(p + 1, len(arms)):
             (rod_a, ja, away_a), (rod_b, jb, away_b) = arms[p], arms[q]
@@ -132,9 +149,5 @@ def rigid_junction(structure, nodes):
                 sb = -sb  # a fold (both arms run the same way): frame to frame
             pair = st._make_pair(rod_a, ja, sa, rod_b, jb, sb)
             ks = pair_constants(pair_rotation_rows(frames[p], sa, frames[q], sb), K[p, q])
-            st._pairs[("junction", nodes[0], p, q)] = pair[:4] + ks + pair[7:]
-            added += 1
-    for n in nodes[1:]:
-        st._merges.append((nodes[0], n))
-    st._cache = None
-    return added
+            pairs[("junction", nodes[0], p, q)] = pair[:4] + ks + pair[7:]
+    return pairs

@@ -48,7 +48,7 @@ from snapmorph.units.frame3d import (
     UnitGeometry,
     arch_nodes_x,
 )
-from snapmorph.units.junctions3d import rigid_junction
+from snapmorph.units.junctions3d import junction_pairs, rigid_junction
 from snapmorph.units.planar import check_flag, check_steps
 from snapmorph.units.push3d import (level, push_through, record_release, relax_released,
                                     transfer_state)
@@ -82,12 +82,18 @@ class Unit3DModel:
     arch: np.ndarray
     supports: np.ndarray
     junctions: list = field(default_factory=list)  # node lists joined at one node frame
+    #: the junctions' fitted pairs (`units.junctions3d.junction_pairs`), one dict per junction,
+    #: filled by the first `to_structure`: the fit is Python work per pair, as costly as a
+    #: tenth of a push, and the same for every structure of this mesh
+    junction_pairs: list | None = None
 
     def to_structure(self):
         """The `solver.Structure3D` of the mesh with its junctions (`units.junctions3d`)."""
         st = self.mesh.to_structure()
-        for nodes in self.junctions:
-            rigid_junction(st, nodes)
+        if self.junction_pairs is None:
+            self.junction_pairs = [junction_pairs(st, nodes) for nodes in self.junctions]
+        for nodes, pairs in zip(self.junctions, self.junction_pairs):
+            rigid_junction(st, nodes, pairs)
         return st
 
 
@@ -516,6 +522,10 @@ def released_state_3d(g, model: Unit3DModel, q_iii, build_options: dict):
     load. Returns (self_standing, metrics dict or None, negative eigenvalues or None, why
     not self-standing ("" when it is))."""
     free = build_unit_mesh_3d(g, actuator=False, supports=False, **build_options)
+    # the same rods and node numbers up to the arch (the actuator's head rods come after
+    # every junction's rods, the rollers are fixes only): the junctions' fit carries over
+    if free.junctions == model.junctions:
+        free.junction_pairs = model.junction_pairs
     st = free.to_structure()
     for node, comps in released_supports(free):
         st.fix(node, comps)
