@@ -57,11 +57,23 @@ from snapmorph.units.result import UnitResultBase
 from snapmorph.units.shapes import arch_height, end_tangent_angle, segment_points
 
 __all__ = ["Unit3DModel", "Unit3DResult", "build_unit_mesh_3d", "build_unit_3d",
-           "simulate_unit_3d", "DEFAULT_NODES_3D"]
+           "simulate_unit_3d", "DEFAULT_NODES_3D", "DEFAULT_JOINTS_3D",
+           "DEFAULT_FOOT_REFINEMENT_3D"]
 
 #: default resolution of the 3-D unit (nodes along a rail): F_cr within ~1.5 % of 81 nodes
 #: (docs/unit3d.md); 81 costs about 3x the time
 DEFAULT_NODES_3D = 41
+
+#: default joints of rods crossing at a node: one node frame per junction
+#: (`units.junctions3d`), the rigid joint that counts every half edge once; "bond" (the
+#: `Mesh3D.bond` pairs, the default before issue 25) double-counts a crossing bar's half edge
+#: and stiffens the rod running through (docs/unit3d.md, "Two mesh options")
+DEFAULT_JOINTS_3D = "node"
+
+#: default foot refinement: the edges across the arch feet 8 times shorter than the spacing.
+#: With node joints at 41 nodes theta (iii) is within 0.4 deg of its converged value for
+#: elastic and stiff end plates (uniform 41 nodes: 1.4 deg; docs/unit3d.md, issue 25)
+DEFAULT_FOOT_REFINEMENT_3D = 8
 
 #: Young's modulus of the end plates' cross bars / E with end_plate="stiff": rigid next to
 #: the sheet (1e3 is not yet rigid: theta moves 0.07 deg more at 161 nodes), and not so far
@@ -148,8 +160,8 @@ def build_unit_mesh_3d(
     bond: str = "joint",
     brace_width: float | None = None,
     end_plate: str = "elastic",
-    joints: str = "bond",
-    foot_refinement: int = 1,
+    joints: str = DEFAULT_JOINTS_3D,
+    foot_refinement: int = DEFAULT_FOOT_REFINEMENT_3D,
 ) -> Unit3DModel:
     """Mesh the 3-D unit (no solver needed): frame base, arch, bonds, rollers, actuator.
 
@@ -161,11 +173,12 @@ def build_unit_mesh_3d(
     plate's length: the end plate is then in-plane rigid next to the rest); ``end_plate``:
     "elastic" (the sheet's own stiffness) or "stiff" (cross bars of 1e4 x E: the end
     plates keep their shape across the width, as the planar model assumes);
-    ``joints``: how rods crossing at a node are joined: "bond" (`Mesh3D.bond`: pairs of edges
-    in both orders) or "node" (one node frame per junction, `units.junctions3d`, listed in
-    the model's ``junctions``; docs/unit3d.md); ``foot_refinement``: the edges next to the
-    arch feet x0 are this many times shorter than the spacing, doubling in length away from
-    them (1: the uniform mesh).
+    ``joints``: how rods crossing at a node are joined: "node" (default: one node frame per
+    junction, `units.junctions3d`, listed in the model's ``junctions``; docs/unit3d.md) or
+    "bond" (`Mesh3D.bond`: pairs of edges in both orders, the default before issue 25);
+    ``foot_refinement``: the edges next to the arch feet x0 are this many times shorter than
+    the spacing, doubling in length away from them (default 8; 1: the uniform mesh, the
+    default before issue 25 with ``joints="bond"``).
     Returns a `Unit3DModel` whose ``structure`` is None.
     """
     if not isinstance(g, UnitGeometry):
@@ -566,8 +579,8 @@ def simulate_unit_3d(
     brace_width: float | None = None,
     end_plate: str = "elastic",
     check_self_standing: bool = True,
-    joints: str = "bond",
-    foot_refinement: int = 1,
+    joints: str = DEFAULT_JOINTS_3D,
+    foot_refinement: int = DEFAULT_FOOT_REFINEMENT_3D,
 ) -> Unit3DResult:
     """Push the 3-D unit's actuator down until it snaps; the planar metrics plus arch tilt,
     rail twist and sideways motion of the arch (see `Unit3DResult`).
