@@ -78,21 +78,19 @@ def pair_rotation_rows(frame_a, sa, frame_b, sb):
     from snapmorph.solver.structure3d import _frame_pair
 
     z = _frame_pair(frame_a[0], frame_a[1], frame_b[0], frame_b[1], sa, sb)
-    g = np.empty(18)
+    g = np.empty((3, 18))  # the gradients of kappa1, kappa2, psi
     h = np.empty((18, 18))
-    rows = np.zeros((3, 3))
-    v = z[9:].reshape(3, 3)  # frame b's three vectors
-    for c in range(3):
-        if c < 2:
-            material_curvature(z, c + 1, g, h)
-        else:
-            twist_angle(z, g, h)
-        # d/d omega of g . v(omega) = g . (omega x v) = omega . (v x g), summed over b's vectors
-        gv = g[9:].reshape(3, 3)
-        rows[c, 0] = np.sum(v[:, 1] * gv[:, 2] - v[:, 2] * gv[:, 1])
-        rows[c, 1] = np.sum(v[:, 2] * gv[:, 0] - v[:, 0] * gv[:, 2])
-        rows[c, 2] = np.sum(v[:, 0] * gv[:, 1] - v[:, 1] * gv[:, 0])
-    return rows
+    material_curvature(z, 1, g[0], h)
+    material_curvature(z, 2, g[1], h)
+    twist_angle(z, g[2], h)
+    # d/d omega of g . v(omega) = g . (omega x v) = omega . (v x g), summed over frame b's
+    # three vectors v (whole arrays at once: numpy calls per entry cost more than the fit)
+    v, gv = z[9:].reshape(1, 3, 3), g[:, 9:].reshape(3, 3, 3)
+    cross = np.empty((3, 3, 3))
+    cross[..., 0] = v[..., 1] * gv[..., 2] - v[..., 2] * gv[..., 1]
+    cross[..., 1] = v[..., 2] * gv[..., 0] - v[..., 0] * gv[..., 2]
+    cross[..., 2] = v[..., 0] * gv[..., 1] - v[..., 1] * gv[..., 0]
+    return cross[:, 0] + cross[:, 1] + cross[:, 2]
 
 
 def pair_constants(rows, K):

@@ -12,8 +12,10 @@ Geometry (x along the base, y across it, z up; `../shared/unit-model.md`, docs/u
   along the whole length, and two solid end regions 0 <= x <= b + w (and mirrored) of width 4w.
   An end region is a grid: the rails, a centre strip of width 2w (y = 0), cross bars along y
   at every end-region node before x0 (each as wide, in x, as the length of plate it stands
-  for; each two rods running out from the centre), rigidly jointed where they cross
-  (`Mesh3D.bond`), and two crossed pairs of braces for the plate's in-plane shear stiffness.
+  for; each two rods running out from the centre), rigidly jointed where they cross (at one
+  node frame, `units.junctions3d`; ``joints="bond"``: `Mesh3D.bond`), and two crossed pairs
+  of braces for the plate's in-plane shear stiffness. The edges across the arch feet are 8
+  times shorter than the spacing (``foot_refinement``).
   The hollow middle is the two rails only. ``end_plate="stiff"``: bars of 1e4 x E (rigid across the width).
 - the arch, a strip of width w on the centre line, flat on the end regions and bonded there
   (shared positions; orientations jointed where both neighbouring edges are bonded),
@@ -60,8 +62,9 @@ __all__ = ["Unit3DModel", "Unit3DResult", "build_unit_mesh_3d", "build_unit_3d",
            "simulate_unit_3d", "DEFAULT_NODES_3D", "DEFAULT_JOINTS_3D",
            "DEFAULT_FOOT_REFINEMENT_3D"]
 
-#: default resolution of the 3-D unit (nodes along a rail): F_cr within ~1.5 % of 81 nodes
-#: (docs/unit3d.md); 81 costs about 3x the time
+#: default resolution of the 3-D unit (nodes along a rail): with the default joints and foot
+#: refinement, theta (iii) within 0.4 deg of its converged value and F_cr within 0.3 % of 161
+#: nodes at h = 40.68 mm (docs/unit3d.md, "The default mesh since issue 25")
 DEFAULT_NODES_3D = 41
 
 #: default joints of rods crossing at a node: one node frame per junction
