@@ -124,3 +124,16 @@ def test_the_default_mesh_is_within_half_a_degree_of_the_converged_theta(plate):
     assert 0.0 < r < 0.75  # monotone and converging: the extrapolation's tail is bounded
     converged = n161 + (n161 - n81) * r / (1.0 - r)
     assert abs(default - converged) < 0.5
+
+
+def test_the_release_reuses_the_junction_fit_of_the_pushed_mesh():
+    """The fit is done once per mesh (`Unit3DModel.junction_pairs`); the released unit's mesh
+    (no actuator, no rollers) has the same junction rods, so the pushed mesh's fit is its own."""
+    from snapmorph.units.junctions3d import junction_pairs
+
+    pushed = build_unit_mesh_3d(SPECIMEN, nodes=21, tilt_deg=2.0)
+    pushed.to_structure()
+    free = build_unit_mesh_3d(SPECIMEN, nodes=21, tilt_deg=2.0, actuator=False, supports=False)
+    assert free.junctions == pushed.junctions
+    st = free.mesh.to_structure()
+    assert [junction_pairs(st, nodes) for nodes in free.junctions] == pushed.junction_pairs
