@@ -3,6 +3,7 @@ checkout:
 
     .venv/bin/python -m studies.studies3d table1   [nodes,...]   # 3-D vs planar, Table 1
     .venv/bin/python -m studies.studies3d tilt     [nodes]       # F_cr knock-down vs tilt
+    .venv/bin/python -m studies.studies3d offsets  [nodes]       # apex / actuator offsets
     .venv/bin/python -m studies.studies3d unit2d   [nodes,...]   # 2-D unit, mesh convergence
     .venv/bin/python -m studies.studies3d map2d    [nodes]       # 2-D unit, bistability map
     .venv/bin/python -m studies.studies3d theta_residual [nodes,...] [all|decisive|table1]
@@ -84,6 +85,26 @@ def tilt(nodes=41, tilts=(0.0, 1.0, 2.0, 5.0), heights=(19.24, 40.68), t=0.5, pl
             rows.append(dict(h=g.h, tilt_deg=a, F_cr=r.F_cr, theta_deg=r.theta_deg, S=r.S,
                              status=r.status, knockdown=kd))
     return rows
+
+
+def offsets(nodes=41, heights=(19.24, 40.68), t=0.5, plate="elastic"):
+    """F_cr and theta against the perfect unit for a sideways apex offset (1, 2 mm) and the
+    actuator off centre (2, 5 mm): docs/unit3d.md, "Apex offset and actuator off centre"."""
+    from snapmorph.units.unit3d import simulate_unit_3d
+
+    cases = (("none", {}), ("apex offset 1 mm", {"apex_offset": 1 * MM}),
+             ("apex offset 2 mm", {"apex_offset": 2 * MM}),
+             ("actuator 2 mm off centre", {"actuator_offset": 2 * MM}),
+             ("actuator 5 mm off centre", {"actuator_offset": 5 * MM}))
+    for h in heights:
+        g = _geometry(h, t, 99.5 if h < 30 else 99.4)
+        base = None
+        for name, options in cases:
+            r = simulate_unit_3d(g, nodes=nodes, end_plate=plate, **options)
+            base = base or r
+            print(f"h={h} {name} n={nodes} {plate}: status {r.status} F_cr {r.F_cr:.4f} N "
+                  f"({100 * (r.F_cr / base.F_cr - 1):+.2f} %) theta {r.theta_deg:.2f} deg "
+                  f"({r.theta_deg - base.theta_deg:+.2f})", flush=True)
 
 
 def unit2d(nodes=(21, 41, 81), h=40.0, t=0.5, L=100.0, w=5.0):
@@ -177,6 +198,8 @@ if __name__ == "__main__":  # pragma: no cover
         table1(**({"nodes": arg} if arg else {}))
     elif what == "tilt":
         tilt(**({"nodes": arg[0]} if arg else {}))
+    elif what == "offsets":
+        offsets(**({"nodes": arg[0]} if arg else {}))
     elif what == "unit2d":
         unit2d(**({"nodes": arg} if arg else {}))
     elif what == "map2d":
@@ -185,5 +208,5 @@ if __name__ == "__main__":  # pragma: no cover
         theta_residual(**({"nodes": arg} if arg else {}),
                        **({"which": sys.argv[3]} if len(sys.argv) > 3 else {}))
     else:
-        raise SystemExit(f"unknown study {what!r}: table1, tilt, unit2d, map2d or "
+        raise SystemExit(f"unknown study {what!r}: table1, tilt, offsets, unit2d, map2d or "
                          f"theta_residual")

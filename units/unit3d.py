@@ -12,8 +12,10 @@ Geometry (x along the base, y across it, z up; `../shared/unit-model.md`, docs/u
   along the whole length, and two solid end regions 0 <= x <= b + w (and mirrored) of width 4w.
   An end region is a grid: the rails, a centre strip of width 2w (y = 0), cross bars along y
   at every end-region node before x0 (each as wide, in x, as the length of plate it stands
-  for; each two rods running out from the centre), rigidly jointed where they cross
-  (`Mesh3D.bond`), and two crossed pairs of braces for the plate's in-plane shear stiffness.
+  for; each two rods running out from the centre), rigidly jointed where they cross (at one
+  node frame, `units.junctions3d`; ``joints="bond"``: `Mesh3D.bond`), and two crossed pairs
+  of braces for the plate's in-plane shear stiffness. The edges across the arch feet are 8
+  times shorter than the spacing (``foot_refinement``).
   The hollow middle is the two rails only. ``end_plate="stiff"``: bars of 1e4 x E (rigid across the width).
 - the arch, a strip of width w on the centre line, flat on the end regions and bonded there
   (shared positions; orientations jointed where both neighbouring edges are bonded),
@@ -48,7 +50,7 @@ from snapmorph.units.frame3d import (
     UnitGeometry,
     arch_nodes_x,
 )
-from snapmorph.units.junctions3d import rigid_junction
+from snapmorph.units.junctions3d import junction_pairs, rigid_junction
 from snapmorph.units.planar import check_flag, check_steps
 from snapmorph.units.push3d import (level, push_through, record_release, relax_released,
                                     transfer_state)
@@ -57,11 +59,24 @@ from snapmorph.units.result import UnitResultBase
 from snapmorph.units.shapes import arch_height, end_tangent_angle, segment_points
 
 __all__ = ["Unit3DModel", "Unit3DResult", "build_unit_mesh_3d", "build_unit_3d",
-           "simulate_unit_3d", "DEFAULT_NODES_3D"]
+           "simulate_unit_3d", "DEFAULT_NODES_3D", "DEFAULT_JOINTS_3D",
+           "DEFAULT_FOOT_REFINEMENT_3D"]
 
-#: default resolution of the 3-D unit (nodes along a rail): F_cr within ~1.5 % of 81 nodes
-#: (docs/unit3d.md); 81 costs about 3x the time
+#: default resolution of the 3-D unit (nodes along a rail): with the default joints and foot
+#: refinement, theta (iii) within 0.4 deg of its converged value and F_cr within 0.3 % of 161
+#: nodes at h = 40.68 mm (docs/unit3d.md, "The default mesh since issue 25")
 DEFAULT_NODES_3D = 41
+
+#: default joints of rods crossing at a node: one node frame per junction
+#: (`units.junctions3d`), the rigid joint that counts every half edge once; "bond" (the
+#: `Mesh3D.bond` pairs, the default before issue 25) double-counts a crossing bar's half edge
+#: and stiffens the rod running through (docs/unit3d.md, "Two mesh options")
+DEFAULT_JOINTS_3D = "node"
+
+#: default foot refinement: the edges across the arch feet 8 times shorter than the spacing.
+#: With node joints at 41 nodes theta (iii) is within 0.4 deg of its converged value for
+#: elastic and stiff end plates (uniform 41 nodes: 1.4 deg; docs/unit3d.md, issue 25)
+DEFAULT_FOOT_REFINEMENT_3D = 8
 
 #: Young's modulus of the end plates' cross bars / E with end_plate="stiff": rigid next to
 #: the sheet (1e3 is not yet rigid: theta moves 0.07 deg more at 161 nodes), and not so far
@@ -82,12 +97,18 @@ class Unit3DModel:
     arch: np.ndarray
     supports: np.ndarray
     junctions: list = field(default_factory=list)  # node lists joined at one node frame
+    #: the junctions' fitted pairs (`units.junctions3d.junction_pairs`), one dict per junction,
+    #: filled by the first `to_structure`: the fit is Python work per pair, as costly as a
+    #: tenth of a push, and the same for every structure of this mesh
+    junction_pairs: list | None = None
 
     def to_structure(self):
         """The `solver.Structure3D` of the mesh with its junctions (`units.junctions3d`)."""
         st = self.mesh.to_structure()
-        for nodes in self.junctions:
-            rigid_junction(st, nodes)
+        if self.junction_pairs is None:
+            self.junction_pairs = [junction_pairs(st, nodes) for nodes in self.junctions]
+        for nodes, pairs in zip(self.junctions, self.junction_pairs):
+            rigid_junction(st, nodes, pairs)
         return st
 
 
@@ -142,8 +163,8 @@ def build_unit_mesh_3d(
     bond: str = "joint",
     brace_width: float | None = None,
     end_plate: str = "elastic",
-    joints: str = "bond",
-    foot_refinement: int = 1,
+    joints: str = DEFAULT_JOINTS_3D,
+    foot_refinement: int = DEFAULT_FOOT_REFINEMENT_3D,
 ) -> Unit3DModel:
     """Mesh the 3-D unit (no solver needed): frame base, arch, bonds, rollers, actuator.
 
@@ -155,11 +176,12 @@ def build_unit_mesh_3d(
     plate's length: the end plate is then in-plane rigid next to the rest); ``end_plate``:
     "elastic" (the sheet's own stiffness) or "stiff" (cross bars of 1e4 x E: the end
     plates keep their shape across the width, as the planar model assumes);
-    ``joints``: how rods crossing at a node are joined: "bond" (`Mesh3D.bond`: pairs of edges
-    in both orders) or "node" (one node frame per junction, `units.junctions3d`, listed in
-    the model's ``junctions``; docs/unit3d.md); ``foot_refinement``: the edges next to the
-    arch feet x0 are this many times shorter than the spacing, doubling in length away from
-    them (1: the uniform mesh).
+    ``joints``: how rods crossing at a node are joined: "node" (default: one node frame per
+    junction, `units.junctions3d`, listed in the model's ``junctions``; docs/unit3d.md) or
+    "bond" (`Mesh3D.bond`: pairs of edges in both orders, the default before issue 25);
+    ``foot_refinement``: the edges next to the arch feet x0 are this many times shorter than
+    the spacing, doubling in length away from them (default 8; 1: the uniform mesh, the
+    default before issue 25 with ``joints="bond"``).
     Returns a `Unit3DModel` whose ``structure`` is None.
     """
     if not isinstance(g, UnitGeometry):
@@ -516,6 +538,10 @@ def released_state_3d(g, model: Unit3DModel, q_iii, build_options: dict):
     load. Returns (self_standing, metrics dict or None, negative eigenvalues or None, why
     not self-standing ("" when it is))."""
     free = build_unit_mesh_3d(g, actuator=False, supports=False, **build_options)
+    # the same rods and node numbers up to the arch (the actuator's head rods come after
+    # every junction's rods, the rollers are fixes only): the junctions' fit carries over
+    if free.junctions == model.junctions:
+        free.junction_pairs = model.junction_pairs
     st = free.to_structure()
     for node, comps in released_supports(free):
         st.fix(node, comps)
@@ -556,8 +582,8 @@ def simulate_unit_3d(
     brace_width: float | None = None,
     end_plate: str = "elastic",
     check_self_standing: bool = True,
-    joints: str = "bond",
-    foot_refinement: int = 1,
+    joints: str = DEFAULT_JOINTS_3D,
+    foot_refinement: int = DEFAULT_FOOT_REFINEMENT_3D,
 ) -> Unit3DResult:
     """Push the 3-D unit's actuator down until it snaps; the planar metrics plus arch tilt,
     rail twist and sideways motion of the arch (see `Unit3DResult`).
