@@ -169,13 +169,15 @@ class SheetStep:
 @dataclass(repr=False)
 class SheetResult:
     """The steps of `simulate_sheet` in push order; ``final``: the last step (None: no
-    step); ``boundary``; ``order``; ``solve_time`` s."""
+    step); ``boundary``; ``order``; ``solve_time`` s; ``protocol``."""
 
     sheet: SheetModel
     boundary: str
     order: list
     steps: list = field(default_factory=list)
     solve_time: float = NAN
+    #: how the cells were pushed (`PROTOCOLS`)
+    protocol: str = "mgdc"
 
     @property
     def final(self):
@@ -222,7 +224,7 @@ def simulate_sheet(sheet: SheetModel, order, boundary: str = "free", steps: int 
     t0 = time.perf_counter()
     released = sheet_structure(sheet, boundary)
     q = np.array(released.initial_state() if start is None else start, dtype=float)
-    result = SheetResult(sheet, boundary, order)
+    result = SheetResult(sheet, boundary, order, protocol=protocol)
     for c in order:
         result.steps.append(_next_step(sheet, boundary, released, c, result, q,
                                        (steps, protocol)))
@@ -392,7 +394,7 @@ def _run_orders(sheet, runs, boundary, push, progress=None):
     results = []
     for order in runs:
         t0 = time.perf_counter()
-        result = SheetResult(sheet, boundary, list(order))
+        result = SheetResult(sheet, boundary, list(order), protocol=push[1])
         q = q0
         for k, c in enumerate(order):
             key = tuple(order[: k + 1])

@@ -55,6 +55,7 @@ def states_dataset(result):
         coords={"component": ["x", "y", "z"], "cell": np.arange(sheet.n_cells)},
         attrs={"title": "snapmorph sheet states", "tiling": sheet.tiling,
                "rows": sheet.shape[0], "cols": sheet.shape[1], "boundary": result.boundary,
+               "protocol": result.protocol,
                "order": ",".join(map(str, result.order)), "L_m": sheet.geometry.L,
                "h_m": sheet.geometry.h, "t_m": sheet.geometry.t, "w_m": sheet.geometry.w,
                "nodes_per_side": sheet.nodes},

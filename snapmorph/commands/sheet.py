@@ -59,6 +59,11 @@ def add_parser(sub):
     p.add_argument("--boundary", choices=("free", "clamped-edge"), default="free",
                    help="free (rigid-body motion held by six components) or clamped-edge "
                    "(the bottom edge held); default free")
+    p.add_argument("--protocol", choices=("mgdc", "rig"), default="mgdc",
+                   help="how a cell is pushed: mgdc (load-controlled path through the snap, "
+                   "default) or rig (a displacement-controlled rig that settles into the stable "
+                   "state at every 2 mm and jumps where the path folds; answers pushes inside a "
+                   "curled sheet that mgdc cuts short, slower)")
     p.add_argument("--nodes", type=integer(11, 201, what="nodes along a cell side"), default=21,
                    help="resolution: nodes along a cell side (default 21)")
     p.add_argument("--plot", metavar="PNG", help="3-D views of the sheet as made and after "
@@ -79,8 +84,9 @@ def run(args: argparse.Namespace) -> int:
     order = check_order(sheet, args.order)
     rows, cols = sheet.shape
     print(f"sheet {args.tiling} {rows}x{cols} L={args.L:g} h={args.h:g} t={args.t:g} "
-          f"w={args.w:g} b={args.b:g} mm, {args.boundary}, order {','.join(map(str, order))}")
-    r = simulate_sheet(sheet, order, boundary=args.boundary)
+          f"w={args.w:g} b={args.b:g} mm, {args.boundary}, order {','.join(map(str, order))}, "
+          f"protocol {args.protocol}")
+    r = simulate_sheet(sheet, order, boundary=args.boundary, protocol=args.protocol)
     print("  step  cell   F_cr (N)   push          stable  global mode  snapped cells")
     for k, s in enumerate(r.steps):
         snapped = ",".join(str(c) for c in s.snapped.nonzero()[0]) or "-"

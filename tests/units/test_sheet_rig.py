@@ -115,3 +115,21 @@ def test_negative_mode_where_the_eigenvalue_nearest_zero_is_positive():
     v = push3d._negative_mode(_DenseSystem(K), None)
     assert float(v @ K @ v) / float(v @ v) == pytest.approx(-4.0, rel=1e-6)
     assert abs(float(v @ Q[:, 0])) == pytest.approx(np.linalg.norm(v), rel=1e-6)
+
+
+def test_cli_pushes_with_the_rig_and_records_the_protocol(tmp_path, capsys):
+    import xarray as xr
+
+    from snapmorph.cli import main
+
+    nc = tmp_path / "states.nc"
+    assert main(["sheet", "--L", "100", "--h", "40", "--t", "0.5", "--w", "5", "--cells", "1x1",
+                 "--order", "0", "--protocol", "rig", "--out", str(nc)]) == 0
+    out = capsys.readouterr().out
+    assert "protocol rig" in out and "NOT A RESULT" not in out
+    with xr.open_dataset(nc) as ds:
+        assert ds.attrs["protocol"] == "rig"
+        assert float(ds["F_cr"].values[-1]) == pytest.approx(1.2468, abs=5e-4)
+    assert main(["sheet", "--L", "100", "--h", "40", "--t", "0.5", "--w", "5", "--cells", "1x1",
+                 "--order", "0", "--protocol", "force"]) == 2
+    assert "--protocol" in capsys.readouterr().err
