@@ -166,9 +166,10 @@ class RigPush:
     stress-free state, F N on the apex, down positive), ``F_cr`` N and ``d_cr`` m (NaN:
     the force never peaked), ``status`` ("ok": F fell below zero after its peak and came
     back to zero, state (iii); "monostable: ..." F stayed positive to the end of the travel;
-    "not converged: ..." a descent failed, or F was still below zero at the travel's end), ``jumps`` (d m of the increments where the sheet jumped), ``iterations``,
-    ``full_states`` {"iii": the last held state (the cell at F <= 0, or at the travel's
-    end)} for the release; ``path`` None (no load-controlled path)."""
+    "not converged: ..." a descent failed, or F was still below zero at the travel's end),
+    ``jumps`` (d m of the increments where the sheet jumped), ``iterations``,
+    ``full_states`` {"iii": the last held state (state (iii), or the travel's end when F
+    stayed positive)} for the release; ``path`` None (no load-controlled path)."""
 
     curve: tuple
     F_cr: float
@@ -223,8 +224,8 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
         Fs.append(F)
         if F < 0.0 and 0 < int(np.argmax(Fs)) < len(Fs) - 1:
             below = True  # past the peak and past state (ii): the cell pulls itself on
-            status = (f"not converged: F < 0 from d = {d:.6g} m to the travel's end (no "
-                      f"zero-force state (iii) within it)")
+            status = (f"not converged: F < 0 still at the travel's end (d = {d:.6g} m): no "
+                      f"zero-force state (iii) within it")
         elif below:  # F back to zero or above: state (iii), the cell holds itself
             status = "ok"
             break
