@@ -76,9 +76,17 @@ def test_rig_records_stable_held_states_and_its_end_state_is_state_iii(single):
     assert np.max(np.abs(pos - st.positions_of(out.full_states["iii"]))) < 1e-8
 
 
-def test_protocol_is_checked(single):
+def test_protocol_and_its_steps_are_checked(single):
     with pytest.raises(ValueError, match="protocol"):
         simulate_sheet(single, [0], protocol="force")
+    for steps in (0, -3, 2.5, True, 10**6):
+        with pytest.raises(ValueError, match=r"steps .* must be an integer in \[1, 100000\]"):
+            simulate_sheet(single, [0], steps=steps)
+    # the rig's increments must resolve the peak and the negative force (5 answered
+    # "monostable" for this cell, which snaps)
+    for steps in (5, 19, 2.5):
+        with pytest.raises(ValueError, match=r"steps \(the rig's increments .* \[20, 100000\]"):
+            simulate_sheet(single, [0], steps=steps, protocol="rig")
 
 
 class _DenseSystem:
