@@ -31,6 +31,10 @@ DOWN = (0.0, 0.0, -1.0)
 #: a step whose largest node displacement exceeds this many increments of d is a jump: the
 #: next guess is not extrapolated from it (it would jump as far again)
 JUMP_FACTOR = 3.0
+#: the rig's stretch limit: a push ends where the centre line of a rod is stretched (or
+#: shortened) by more than this (PETG's elastic range ends near 50 MPa / 2.2 GPa = 2.3 %;
+#: a cell that snaps stays below 0.03 %)
+STRETCH_LIMIT = 0.02
 #: the descent's iteration cap per increment (a jump across a snap was seen to take ~400)
 MAX_ITER = 2000
 
@@ -179,6 +183,7 @@ class RigPush:
     iterations: int = 0
     full_states: dict = field(default_factory=dict)
     path: object = None
+    stretch: np.ndarray = None
 
 
 def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
@@ -193,18 +198,16 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
     length, fscale = st.scales()
     tol_force, tol_disp, max_move = 1e-9 * fscale, 1e-11 * length, 0.05 * length
     dd = (d_end - d_start) / max(int(increments), 1)
-    q_prev, q_now = None, np.array(q, dtype=float)
+    q_now = np.array(q, dtype=float)
     ds, Fs, jumps, total = [d_start], [0.0], [], 0
+    strains = [stretch(st, q_now)]
     below = False
     status = f"monostable: F > 0 over the whole push (to d = {d_end:.6g} m)"
     for k in range(1, max(int(increments), 1) + 1):
         d = d_start + k * dd
-        guess = q_now.copy() if q_prev is None else 2.0 * q_now - q_prev
-        # the held group moves by the increment from where it is (a curled sheet has tilted
-        # it: its members keep their offsets)
-        guess[held] = q_now[held] + sign * dd
         system.reset_frames()
         try:
+            guess, predicted = _predict(system, st, q_now, held, sign * dd, max_move)
             total += minimize_energy(system, guess, tol_force, tol_disp, max_move=max_move)
         except RuntimeError as exc:
             status = f"not converged: the rig's descent at d = {d:.6g} m: {exc}"
@@ -215,13 +218,26 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
             break
         F = float(c.force(system))
         q_new = canonical(system, guess)
+        # a jump: the state moved much further than the tangent said (a free sheet's far
+        # nodes swing by a lever's multiple of the increment on a smooth branch too)
         moved = float(np.max(np.abs(st.positions_of(q_new) - st.positions_of(q_now))))
-        jumped = moved > JUMP_FACTOR * abs(dd)
-        if jumped:
+        if moved > JUMP_FACTOR * max(predicted, abs(dd)):
             jumps.append(d)
-        q_prev, q_now = (None if jumped else q_now), q_new
+        strain = stretch(st, q_new)
+        if strain > STRETCH_LIMIT:
+            # beyond the material's elastic range the model no longer describes the
+            # specimen (a cell held by its neighbours is pulled taut: its arches reached
+            # 120 % at 3 h): the push ends at the last state within it
+            status = (f"not converged: F < 0 still where a rod's stretch passed "
+                      f"{STRETCH_LIMIT:.0%} (d = {d:.6g} m): no zero-force state (iii) "
+                      f"within the elastic range" if below else
+                      f"monostable: F > 0 over the push to d = {ds[-1]:.6g} m, where a rod's "
+                      f"stretch passes {STRETCH_LIMIT:.0%} (the elastic range's end)")
+            break
+        q_now = q_new
         ds.append(d)
         Fs.append(F)
+        strains.append(strain)
         if F < 0.0 and 0 < int(np.argmax(Fs)) < len(Fs) - 1:
             below = True  # past the peak and past state (ii): the cell pulls itself on
             status = (f"not converged: F < 0 still at the travel's end (d = {d:.6g} m): no "
@@ -232,7 +248,50 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
     d_arr, F_arr = np.asarray(ds), np.asarray(Fs)
     F_cr, d_cr = _peak(d_arr, F_arr, jumps)
     return RigPush((d_arr, F_arr), F_cr, d_cr, status, jumps, total,
-                   {"iii": q_now} if not status.startswith("not converged") else {})
+                   {"iii": q_now} if not status.startswith("not converged") else {},
+                   stretch=np.asarray(strains))
+
+
+def stretch(st, q) -> float:
+    """The largest axial strain (stretch or shortening) of the centre line of any rod
+    edge of the structure ``st`` at the full state ``q`` (dimensionless)."""
+    x, X = st.positions_of(q), st.reference_positions
+    worst = 0.0
+    for rod in st.rods:
+        n = np.asarray(rod.nodes)
+        ref = np.linalg.norm(np.diff(X[n], axis=0), axis=1)
+        now = np.linalg.norm(np.diff(x[n], axis=0), axis=1)
+        worst = max(worst, float(np.max(np.abs(now / ref - 1.0))))
+    return worst
+
+
+def _predict(system, st, q, held, step, max_move):
+    """The tangent predictor of one increment: the stable held state ``q`` with the held
+    DOFs moved by ``step`` (m) and the others by their linear response to it,
+    -K^-1 (dg/dh) step (K at ``q``, definite there; dg/dh, the gradient's rate with the
+    held move, by central differences of +-1e-6 ``step``), capped at ``max_move`` (m).
+    Without it the held group alone moves: the elements next to it are stretched (to second
+    order in the move, with the stretching stiffness), K there is indefinite and the
+    descent takes tens of shifted steps to come back. Returns (the guess, the largest node
+    move it predicts, m)."""
+    eps = 1e-6 * step
+    rate = []
+    for e in (eps, -eps):
+        trial = np.array(q, dtype=float)
+        trial[held] += e
+        system.evaluate(trial)
+        rate.append(np.array(system.grad[:system.n]))
+    dg = (rate[0] - rate[1]) * (step / (2.0 * eps))
+    guess = np.array(q, dtype=float)
+    guess[held] += step
+    system.evaluate(q)
+    if system.factor() and system.negative_eigenvalues == 0:
+        du = system.solve(-dg)
+        big = float(np.max(np.abs(du))) if du.size else 0.0
+        if np.isfinite(big) and big > 0.0:
+            system.increment(guess, du, min(1.0, max_move / big))
+    moved = float(np.max(np.abs(st.positions_of(guess) - st.positions_of(q))))
+    return guess, moved
 
 
 def _peak(d, F, jumps):

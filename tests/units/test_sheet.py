@@ -230,7 +230,7 @@ def test_steps_after_a_release_without_equilibrium_are_not_run(monkeypatch):
 
     calls = []
 
-    def no_release(st, q, max_iter=400):
+    def no_release(st, q, max_iter=400, descent=None):
         calls.append(1)
         return None, None, float("nan"), "no stable equilibrium found (test)", None
 

@@ -12,7 +12,8 @@ from snapmorph.units import push3d
 from snapmorph.units.frame3d import UnitGeometry
 from snapmorph.units.sheet import (PROTOCOLS, build_sheet, shape_distance, sheet_structure,
                                    simulate_sheet)
-from snapmorph.units.sheet_rig import DOWN, canonical, minimize_energy, rig_push
+from snapmorph.units import sheet_rig
+from snapmorph.units.sheet_rig import DOWN, canonical, minimize_energy, rig_push, stretch
 
 G = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
 
@@ -74,6 +75,62 @@ def test_rig_records_stable_held_states_and_its_end_state_is_state_iii(single):
     assert neg == 0  # stable with the apex held, checked by a fresh probe's Newton
     assert F_end == pytest.approx(F[-1], abs=1e-6 * max(1.0, abs(F[-1])))
     assert np.max(np.abs(pos - st.positions_of(out.full_states["iii"]))) < 1e-8
+
+
+def test_stretch_measures_the_largest_edge_strain(single):
+    st = sheet_structure(single)
+    q0 = np.array(st.initial_state(), dtype=float)
+    assert stretch(st, q0) == 0.0
+    q = q0.copy()
+    n3 = 3 * st.n_nodes
+    q[:n3] *= 1.015  # every edge 1.5 % longer (a uniform scaling of the positions)
+    assert stretch(st, q) == pytest.approx(0.015, rel=1e-9)
+    q = q0.copy()
+    q[:n3:3] *= 0.99  # x shortened by 1 %: the edges along x by 1 %, the others less
+    assert stretch(st, q) == pytest.approx(0.01, rel=1e-9)
+
+
+def test_the_tangent_predictor_lands_near_the_next_held_state(single):
+    """The guess of an increment from a held state part-way up the push: the held move with
+    the others' linear response to it leaves a gradient far below that of the held move
+    alone (whose neighbouring elements are stretched to second order in the move), and
+    second order in the increment (the predictor is exact to first order)."""
+    st = sheet_structure(single, "free", 0)
+    apex = int(single.apex[0])
+    start = rig_push(st, apex, np.array(st.initial_state(), dtype=float), 0.0, 0.01, 5)
+    q = start.full_states["iii"]  # held at d = 10 mm, on the rising branch
+    probe = DisplacementProbe(st, apex, DOWN)
+    c, system = probe.control, probe.system
+    held = c.member_dofs[:, c.axis]
+    length, _ = st.scales()
+
+    def residual(step, predict=True):
+        system.reset_frames()
+        if predict:
+            guess, moved = sheet_rig._predict(system, st, q, held, step, 0.05 * length)
+            assert np.allclose(guess[held], q[held] + step) and moved >= abs(step)
+        else:
+            guess = q.copy()
+            guess[held] += step
+        system.evaluate(guess)
+        return float(np.max(np.abs(system.grad[:system.n])))
+
+    assert residual(-2e-3) < 0.05 * residual(-2e-3, predict=False)  # one of 60 over 3 h
+    order = np.log2(residual(-1e-3) / residual(-5e-4))
+    assert 1.6 < order < 2.4
+
+
+def test_a_push_ends_at_the_stretch_limit_as_monostable_within_it(single, monkeypatch):
+    """With the limit lowered below what this cell's snap needs, the push ends where a rod
+    first passes it, every recorded state within it, and says so (an answer with its
+    reason: the elastic range, not a cut-short computation)."""
+    st = sheet_structure(single, "free", 0)
+    q = np.array(st.initial_state(), dtype=float)
+    monkeypatch.setattr(sheet_rig, "STRETCH_LIMIT", 2e-5)
+    out = rig_push(st, int(single.apex[0]), q, 0.0, 3.0 * G.h, 60)
+    assert out.status.startswith("monostable:") and "stretch passes" in out.status
+    assert np.all(out.stretch <= 2e-5) and len(out.curve[0]) < 61
+    assert "iii" in out.full_states  # the release starts from the last state within it
 
 
 def test_protocol_and_its_steps_are_checked(single):
