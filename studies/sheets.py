@@ -9,8 +9,8 @@ orders of one set of cells).
                      # e.g. hexagon 20 21 1,2,3,4,5 2x3 hex.json hex.png 1,2,3,4,5
     .venv/bin/python -m studies.sheets coupling [order] [nodes]  # fast prediction vs sheet
 
-SHEET_PROTOCOL=rig (environment) pushes the cells with the displacement-controlled rig
-(`units.sheet_rig`) instead of the load-controlled protocol (the default, "mgdc").
+SHEET_PROTOCOL=mgdc (environment) pushes the cells by the load-controlled protocol
+(`units.push3d`) instead of the displacement-controlled rig (`units.sheet_rig`, the default).
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ def final_shape(nodes, order, shape=(3, 3), tiling="square"):
 
     g = UnitGeometry(L=0.1, h=0.04, t=0.5e-3, w=5e-3)
     sheet = build_sheet(g, tiling, shape, nodes=nodes)
-    r = simulate_sheet(sheet, order, protocol=os.environ.get("SHEET_PROTOCOL", "mgdc"))
+    r = simulate_sheet(sheet, order, protocol=os.environ.get("SHEET_PROTOCOL", "rig"))
     f = r.final
     curv = np.array([edge_metrics(f.positions[e])["curvature"] for e in sheet.edge_nodes])
     return f.apex_heights, curv, r
@@ -119,7 +119,7 @@ def memory(tiling="square", n_orders=20, nodes=21, cells=(0, 2, 4, 6, 8), shape=
 
     include = [o for o in include if sorted(o) == sorted(cells)]
     runs = branching_orders(cells, n_orders, include=include)
-    protocol = os.environ.get("SHEET_PROTOCOL", "mgdc")
+    protocol = os.environ.get("SHEET_PROTOCOL", "rig")
     print(f"{tiling} {shape[0]}x{shape[1]}, cells {cells}: pushes by protocol {protocol!r}",
           flush=True)
     res = explore_orders(sheet, cells, orders=runs, progress=progress, protocol=protocol)

@@ -34,7 +34,7 @@ import numpy as np
 
 from snapmorph.units.frame3d import PETG_NU, UnitGeometry
 from snapmorph.units.push3d import path_states, push_through, relax_released
-from snapmorph.units.sheet_rig import release_descent, rig_push
+from snapmorph.units.sheet_rig import release_descent, rig_push, rig_release_descent
 from snapmorph.units.status import answered
 from snapmorph.units.sheet_mesh import TILINGS, SheetModel, build_sheet_mesh, check_cells
 
@@ -48,6 +48,10 @@ BOUNDARIES = ("free", "clamped-edge")
 #: (`units.push3d`); "rig", a displacement-controlled rig that settles into the stable held
 #: state at every increment and jumps where the held path folds (`units.sheet_rig`)
 PROTOCOLS = ("mgdc", "rig")
+#: the protocol of `simulate_sheet` and `explore_orders` when none is named: the rig, which
+#: answers every push of a curled sheet (the load-controlled path stops at its step cap in
+#: some: 4 of the 3 x 3 sheet's 9) and is the faster of the two there (docs/sheets.md)
+DEFAULT_PROTOCOL = "rig"
 #: the rig's fewest increments over 3 h: with fewer the samples step over the force's peak
 #: and its negative part (a 1 x 1 sheet at h = 40 mm: 3 or 5 increments answer "monostable"
 #: for a cell that snaps, 10 or 15 give F_cr 6-9 % high; 20, 30 and 60 agree within 0.06 %)
@@ -114,10 +118,32 @@ def check_boundary(boundary):
 
 
 def apex_heights(sheet: SheetModel, positions) -> np.ndarray:
-    """(n_cells,) m: every cell's apex above the mean height of its sides' midpoints (h as
-    made, < 0 when the cell is snapped)."""
-    P = np.asarray(positions)
-    return np.array([P[a, 2] - np.mean(P[f, 2]) for a, f in zip(sheet.apex, sheet.feet)])
+    """(n_cells,) m: every cell's apex above the centroid of its sides' midpoints, along the
+    cell's own normal (h as made, < 0 when the cell is snapped). The normal is that of the
+    midpoints' polygon (Newell's: the mean plane of a warped cell), oriented as the as-made
+    cell's +z by the midpoints' order, so the height is a property of the shape, whatever
+    its placement: a curled free sheet turned over or rolled on its side has the same
+    heights. (The global z alone called one shape "snapped" in one placement and not in
+    another.)"""
+    P = np.asarray(positions, dtype=float)
+    X = np.asarray(sheet.mesh.positions, dtype=float)
+    out = np.empty(len(sheet.apex))
+    for k, (a, f) in enumerate(zip(sheet.apex, sheet.feet)):
+        f = np.asarray(f)
+        sign = 1.0 if _newell_normal(X[f])[2] >= 0.0 else -1.0
+        n = sign * _newell_normal(P[f])
+        out[k] = float((P[a] - P[f].mean(axis=0)) @ n)
+    return out
+
+
+def _newell_normal(points) -> np.ndarray:
+    """The unit normal of the polygon ``points`` (k, 3) in their order, by Newell's method
+    (the area vector: exact for a plane polygon, the mean plane's for a warped one)."""
+    p, q = points, np.roll(points, -1, axis=0)
+    n = np.array([np.sum((p[:, 1] - q[:, 1]) * (p[:, 2] + q[:, 2])),
+                  np.sum((p[:, 2] - q[:, 2]) * (p[:, 0] + q[:, 0])),
+                  np.sum((p[:, 0] - q[:, 0]) * (p[:, 1] + q[:, 1]))])
+    return n / max(float(np.linalg.norm(n)), 1e-300)
 
 
 @dataclass(repr=False)
@@ -181,7 +207,7 @@ class SheetResult:
     steps: list = field(default_factory=list)
     solve_time: float = NAN
     #: how the cells were pushed (`PROTOCOLS`)
-    protocol: str = "mgdc"
+    protocol: str = DEFAULT_PROTOCOL
 
     @property
     def final(self):
@@ -216,7 +242,7 @@ def check_order(sheet: SheetModel, order) -> list:
 
 
 def simulate_sheet(sheet: SheetModel, order, boundary: str = "free", steps: int = 60,
-                   start=None, protocol: str = "mgdc") -> SheetResult:
+                   start=None, protocol: str = DEFAULT_PROTOCOL) -> SheetResult:
     """Push the cells of ``order`` one at a time (actuator on, then released; module
     docstring) from ``start`` (a full state of the released sheet; None: as made), by
     ``protocol`` (`PROTOCOLS`; ``steps``: the MGDC path's first-step count, or the rig's
@@ -279,6 +305,12 @@ def _step(sheet, boundary, released, cell, q, steps, protocol="mgdc"):
     st = sheet_structure(sheet, boundary, cell)
     q0 = released.initial_state()
     fresh = not np.any(q - q0)
+    if boundary == "free" and not fresh:
+        # the actuator pushes the apex towards its base, along the cell's own normal: a
+        # free sheet (placed only by its rigid-body holds) is first moved rigidly so that
+        # the cell's sides' midpoints lie where they were made (a curled sheet had tilted
+        # the cells by 10-70 degrees from the actuator's z)
+        q = placed_for_push(sheet, released, q, cell)
     # the push's distance counts from the stress-free state: 3 h beyond where the apex is
     # now (an earlier step may have carried it down by more than 3 h: a free sheet curls)
     z = int(released.node_dofs(int(sheet.apex[cell]))[2])
@@ -297,8 +329,9 @@ def _step(sheet, boundary, released, cell, q, steps, protocol="mgdc"):
     # the unit's Levenberg-Marquardt descent, and where it finds no equilibrium the
     # line-search descent (`units.sheet_rig.release_descent`): on one 1 x 2 sheet LM took
     # its 4000 iterations on one machine and converged on another (round-off)
-    qr, neg, moved, why, first = relax_released(released, pushed, RELEASE_MAX_ITER,
-                                                descent=release_descent)
+    qr, neg, moved, why, first = relax_released(
+        released, pushed, RELEASE_MAX_ITER,
+        descent=rig_release_descent if protocol == "rig" else release_descent)
     equilibrium = qr is not None
     if qr is None:
         qr = np.asarray(pushed, dtype=float)
@@ -311,6 +344,53 @@ def _step(sheet, boundary, released, cell, q, steps, protocol="mgdc"):
                      neg == 0, neg, first is None or first > 0, pos, np.array(qr), heights,
                      moved, why, time.perf_counter() - t0,
                      np.array(released.positions_of(pushed)), equilibrium)
+
+
+def placed_for_push(sheet: SheetModel, structure, q, cell: int) -> np.ndarray:
+    """The full state ``q`` of ``sheet`` (canonical twists; ``structure``: the sheet's
+    structure) moved rigidly so that ``cell``'s sides' midpoints best fit (least squares,
+    `rigid_fit`) their as-made positions. The same shape, the same energy: the twists are
+    re-read so that every material frame turns with the positions (`rigid_motion`)."""
+    X = np.asarray(sheet.mesh.positions, dtype=float)
+    feet = np.asarray(sheet.feet[cell])
+    P = np.asarray(structure.positions_of(q), dtype=float)
+    R, shift = rigid_fit(P[feet], X[feet])
+    return rigid_motion(structure.reduced_system(), q, R, shift)
+
+
+def rigid_fit(A, B):
+    """(R, shift): the proper rotation and translation that carry the points ``A`` (k, 3)
+    closest to ``B`` (least squares, Kabsch): B ~ A @ R.T + shift."""
+    A, B = np.asarray(A, dtype=float), np.asarray(B, dtype=float)
+    ca, cb = A.mean(axis=0), B.mean(axis=0)
+    U, _, Vt = np.linalg.svd((A - ca).T @ (B - cb))
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
+    R = Vt.T @ D @ U.T
+    return R, cb - ca @ R.T
+
+
+def rigid_motion(system, q, R, shift) -> np.ndarray:
+    """The full state ``q`` (canonical twists) of a 3-D rod ``system`` moved rigidly: every
+    node x to R x + shift (m), and every edge's twist re-read about the canonical director
+    of its turned tangent (the stress-free director carried to it by one parallel
+    transport, `solver.frames3d.canonical_twist_offset`) so that its material frame turns
+    with R; each twist changes by less than pi (the chain of twists stays continuous).
+    (The positions alone would not do: the canonical director of R t is not R times that
+    of t, and the energy of a 3 x 3 sheet rose from 0.09 J to 1000 J.)"""
+    from snapmorph.solver.frames3d import material_directors, transport_frames
+
+    n3, ne = 3 * int(system.n_nodes), int(system.n_edges)
+    t0, d0 = (np.ascontiguousarray(a[:ne]) for a in system._stress_free)
+    t = np.ascontiguousarray(system._unit_tangents(q))
+    theta = np.asarray(q[n3:n3 + ne], dtype=float)
+    m1 = material_directors(transport_frames(t0, d0, t), t, theta)[0] @ R.T
+    out = np.array(q, dtype=float)
+    out[:n3] = (out[:n3].reshape(-1, 3) @ R.T + shift).ravel()
+    t2 = np.ascontiguousarray(t @ R.T)
+    d2 = transport_frames(t0, d0, t2)
+    raw = np.arctan2(np.sum(np.cross(d2, m1) * t2, axis=1), np.sum(d2 * m1, axis=1))
+    out[n3:n3 + ne] = theta + (raw - theta + np.pi) % (2.0 * np.pi) - np.pi
+    return out
 
 
 # ---------------------------------------------------------------------------- memory
@@ -347,7 +427,7 @@ def _orders(cells, orders, seed):
 
 def explore_orders(sheet: SheetModel, cells, orders=20, boundary: str = "free",
                    tol: float | None = None, seed: int = 0, steps: int = 60,
-                   progress=None, protocol: str = "mgdc") -> dict:
+                   progress=None, protocol: str = DEFAULT_PROTOCOL) -> dict:
     """Snap the same set of ``cells`` in many ``orders`` (a list of permutations, or a
     count: that many distinct ones, `_orders`) and group the final states by
     `shape_distance` (two finals are one shape when within ``tol``, default L / 100).

@@ -37,8 +37,8 @@ def states_dataset(result):
             "snapped": (("state", "cell"), snapped,
                         {"units": "1", "long_name": "cell snapped (1) or as made (0)"}),
             "apex_height": (("state", "cell"), heights,
-                            {"units": "m", "long_name": "apex above the mean height of the "
-                             "cell's side midpoints"}),
+                            {"units": "m", "long_name": "apex above the centroid of the "
+                             "cell's side midpoints, along the cell's normal"}),
             "pushed_cell": (("state",), per_step([s.cell for s in result.steps], -1),
                             {"units": "1", "long_name": "cell pushed in the step (-1: as made)"}),
             "F_cr": (("state",), per_step([s.F_cr for s in result.steps], np.nan),

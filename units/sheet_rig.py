@@ -35,6 +35,9 @@ JUMP_FACTOR = 3.0
 #: shortened) by more than this (PETG's elastic range ends near 50 MPa / 2.2 GPa = 2.3 %;
 #: a cell that snaps stays below 0.03 %)
 STRETCH_LIMIT = 0.02
+#: the descent kicks along a negative mode only where the gradient is below this many
+#: times its tolerance (next to a stationary point; `minimize_energy`)
+KICK_FORCE = 1e4
 #: the descent's iteration cap per increment (a jump across a snap was seen to take ~400)
 MAX_ITER = 2000
 
@@ -62,10 +65,13 @@ def minimize_energy(system, q, tol_force, tol_disp, max_iter=MAX_ITER, max_move=
         K = np.array(system.band[:, :n])  # a banded factorisation overwrites it
         shifted = not (system.factor() and system.negative_eigenvalues == 0)
         kick = None
-        if shifted and not kicked:
-            # the first time K is indefinite: also step along a mode of negative curvature
-            # (at a symmetric saddle the gradient has no component along it, and the shifted
-            # steps alone would leave the saddle only exponentially slowly)
+        if shifted and not kicked and float(np.max(np.abs(g))) <= KICK_FORCE * tol_force:
+            # the first time K is indefinite next to a stationary point: also step along a
+            # mode of negative curvature (at a symmetric saddle the gradient has no
+            # component along it, and the shifted steps alone would leave the saddle only
+            # exponentially slowly). Not farther from one: there the shifted steps go down
+            # anyway, and a guess's passing negative curvature (a rig's increment strains
+            # the elements next to the held group) is no mode of the sheet to kick along
             kicked = True
             kick = _kick(system, q, max_move)
             system.evaluate(q)
@@ -221,7 +227,8 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
         # a jump: the state moved much further than the tangent said (a free sheet's far
         # nodes swing by a lever's multiple of the increment on a smooth branch too)
         moved = float(np.max(np.abs(st.positions_of(q_new) - st.positions_of(q_now))))
-        if moved > JUMP_FACTOR * max(predicted, abs(dd)):
+        jumped = moved > JUMP_FACTOR * max(predicted, abs(dd))
+        if jumped:
             jumps.append(d)
         strain = stretch(st, q_new)
         if strain > STRETCH_LIMIT:
@@ -234,7 +241,7 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
                       f"monostable: F > 0 over the push to d = {ds[-1]:.6g} m, where a rod's "
                       f"stretch passes {STRETCH_LIMIT:.0%} (the elastic range's end)")
             break
-        q_now = q_new
+        q_before, q_now = q_now, q_new
         ds.append(d)
         Fs.append(F)
         strains.append(strain)
@@ -244,12 +251,56 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
                       f"zero-force state (iii) within it")
         elif below:  # F back to zero or above: state (iii), the cell holds itself
             status = "ok"
+            if not jumped and Fs[-2] < 0.0:
+                # state (iii) is where F = 0, inside this increment: found by regula falsi
+                # on the branch (the increment's end overshoots it by up to 2 mm, and the
+                # curvatures there by ~4 %)
+                lo, hi = (ds[-2], Fs[-2], q_before), (d, F, q_now)
+                try:
+                    d, F, q_now, its = _zero_force_state(system, st, c, held, sign, lo, hi,
+                                                         tol_force, tol_disp, max_move,
+                                                         max(Fs))
+                    total += its
+                    ds[-1], Fs[-1], strains[-1] = d, F, stretch(st, q_now)
+                except RuntimeError:
+                    pass  # the increment's end stands as state (iii)
             break
     d_arr, F_arr = np.asarray(ds), np.asarray(Fs)
     F_cr, d_cr = _peak(d_arr, F_arr, jumps)
     return RigPush((d_arr, F_arr), F_cr, d_cr, status, jumps, total,
                    {"iii": q_now} if not status.startswith("not converged") else {},
                    stretch=np.asarray(strains))
+
+
+def _zero_force_state(system, st, c, held, sign, lo, hi, tol_force, tol_disp, max_move,
+                      F_scale, max_iter=8):
+    """(d, F, full state, Newton iterations) of the held state with F = 0 between ``lo`` and
+    ``hi`` ((d m, F N, full state): F < 0 at lo, >= 0 at hi, the branch smooth between), by
+    regula falsi (Illinois) from lo's state, to |F| <= 1e-6 ``F_scale``; the end returned
+    is the bracket's F >= 0 one. Raises RuntimeError when a solve fails or is unstable."""
+    total, side = 0, 0
+    F_lo, F_hi = lo[1], hi[1]
+    for _ in range(max_iter):
+        if hi[1] <= 1e-6 * F_scale or abs(hi[0] - lo[0]) <= tol_disp:
+            break
+        d = lo[0] + (hi[0] - lo[0]) * (-F_lo) / (F_hi - F_lo)
+        system.reset_frames()
+        guess, _ = _predict(system, st, lo[2], held, sign * (d - lo[0]), max_move)
+        total += minimize_energy(system, guess, tol_force, tol_disp, max_move=max_move)
+        system.evaluate(guess)
+        if not (system.factor() and system.negative_eigenvalues == 0):
+            raise RuntimeError("an unstable held state inside the bracket")
+        F = float(c.force(system))
+        state = (d, F, canonical(system, guess))
+        if F >= 0.0:
+            hi, F_hi = state, F
+            F_lo = lo[1] if side != 1 else 0.5 * F_lo  # Illinois: halve the stale end
+            side = 1
+        else:
+            lo, F_lo = state, F
+            F_hi = hi[1] if side != -1 else 0.5 * F_hi
+            side = -1
+    return hi[0], hi[1], hi[2], total
 
 
 def stretch(st, q) -> float:
@@ -294,12 +345,29 @@ def _predict(system, st, q, held, step, max_move):
     return guess, moved
 
 
+def _first_peak(F, drop=0.05):
+    """Index of the path's first maximum: the first sample at least as large as the one
+    before and larger than the one after, from which F falls by ``drop`` of itself before it
+    rises above it again (a wiggle is no maximum); None when F never peaks so."""
+    F = np.asarray(F, dtype=float)
+    for i in range(1, len(F) - 1):
+        if not (F[i] >= F[i - 1] and F[i] > F[i + 1]):
+            continue
+        after = F[i + 1:]
+        above = np.flatnonzero(after > F[i])
+        stop = int(above[0]) if above.size else len(after)
+        if np.min(after[:max(stop, 1)]) <= (1.0 - drop) * F[i]:
+            return i
+    return None
+
+
 def _peak(d, F, jumps):
-    """(F_cr, d_cr): the largest force of the path, at the vertex of the parabola through the
-    samples either side where the branch is smooth there (no jump into or out of it); NaN
-    when the force never peaked (its largest is the last sample)."""
-    i = int(np.argmax(F))
-    if i == 0 or i == len(F) - 1:
+    """(F_cr, d_cr): the path's first maximum (`_first_peak`; where F rises again after it,
+    as in a cell that does not snap and is then pushed on, the later force is not F_cr), at
+    the vertex of the parabola through the samples either side where the branch is smooth
+    there (no jump into or out of it); NaN when the force never peaked."""
+    i = _first_peak(F)
+    if i is None:
         return float("nan"), float("nan")
     if any(d[i - 1] < x <= d[i + 1] for x in jumps):
         return float(F[i]), float(d[i])
@@ -313,16 +381,27 @@ def _peak(d, F, jumps):
     return float(f1 + a * (x - d1) ** 2 + (2 * a * d1 + b) * (x - d1)), float(x)
 
 
-def release_descent(st, q, max_iter=MAX_ITER):
+#: the Levenberg-Marquardt iterations a rig's release tries before the line-search descent
+#: (on the 3 x 3 sheet LM crept through its 4000 in 38 s where `settle` took 1.7 s)
+RIG_RELEASE_LM_ITER = 1000
+
+
+def release_descent(st, q, max_iter=MAX_ITER, lm_iter=None):
     """The descent of a release (`units.push3d.relax_released`): the unit's own
     Levenberg–Marquardt descent (`units.push3d.descend`: small steps that follow the energy
-    down as an overdamped sheet would), and where it finds no step, `settle`."""
+    down as an overdamped sheet would; at most ``lm_iter`` iterations, None: ``max_iter``),
+    and where it finds no equilibrium in them, `settle` from ``q``."""
     from snapmorph.units.push3d import descend
 
     try:
-        return descend(st, q, max_iter=max_iter)
+        return descend(st, q, max_iter=max_iter if lm_iter is None else min(max_iter, lm_iter))
     except Exception:  # noqa: BLE001 - the line-search descent next
         return settle(st, q, max_iter)
+
+
+def rig_release_descent(st, q, max_iter=MAX_ITER):
+    """`release_descent` with the rig's LM budget (`RIG_RELEASE_LM_ITER`)."""
+    return release_descent(st, q, max_iter, RIG_RELEASE_LM_ITER)
 
 
 def settle(st, q, max_iter=MAX_ITER):

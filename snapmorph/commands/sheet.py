@@ -59,11 +59,11 @@ def add_parser(sub):
     p.add_argument("--boundary", choices=("free", "clamped-edge"), default="free",
                    help="free (rigid-body motion held by six components) or clamped-edge "
                    "(the bottom edge held); default free")
-    p.add_argument("--protocol", choices=("mgdc", "rig"), default="mgdc",
-                   help="how a cell is pushed: mgdc (load-controlled path through the snap, "
-                   "default) or rig (a displacement-controlled rig that settles into the stable "
-                   "state at every 2 mm and jumps where the path folds; answers pushes inside a "
-                   "curled sheet that mgdc cuts short, slower)")
+    p.add_argument("--protocol", choices=("mgdc", "rig"), default="rig",
+                   help="how a cell is pushed: rig (default: a displacement-controlled rig that "
+                   "settles into the stable state at every 2 mm and jumps where the path folds; "
+                   "it answers pushes inside a curled sheet) or mgdc (the unit's "
+                   "load-controlled path through the snap; it cuts some of those short)")
     p.add_argument("--nodes", type=integer(11, 201, what="nodes along a cell side"), default=21,
                    help="resolution: nodes along a cell side (default 21)")
     p.add_argument("--plot", metavar="PNG", help="3-D views of the sheet as made and after "

@@ -50,6 +50,66 @@ def test_tilings_share_their_edge_strips(tiling, cells, n_edges, interior):
     assert np.allclose(apex_heights(sheet, sheet.mesh.positions), sheet.geometry.h)
 
 
+def test_a_rigid_motion_of_a_state_keeps_its_energy_and_its_equilibrium():
+    """`rigid_motion` turns positions and material frames together: the energy of a strained
+    state is unchanged under proper rotations (to round-off), and an equilibrium stays one;
+    turning the positions alone (the twists as they were) changes the energy."""
+    from snapmorph.units.sheet import placed_for_push, rigid_motion
+
+    sheet = build_sheet(G, "square", (1, 2), nodes=11)
+    st = sheet_structure(sheet)
+    system = st.reduced_system()
+    q = np.array(st.initial_state(), dtype=float)
+    rng = np.random.default_rng(11)
+    system.increment(q, rng.standard_normal(system.n), 3e-4)  # strained, twisted
+    system.reset_frames()
+    energy = system.evaluate(q)
+    assert energy > 1e-6
+    n3 = 3 * st.n_nodes
+    for _ in range(3):
+        R = np.linalg.qr(rng.standard_normal((3, 3)))[0]
+        R *= np.sign(np.linalg.det(R))
+        moved = rigid_motion(system, q, R, rng.standard_normal(3))
+        system.reset_frames()
+        assert system.evaluate(moved) == pytest.approx(energy, rel=1e-9)
+        naive = q.copy()
+        naive[:n3] = (q[:n3].reshape(-1, 3) @ R.T).ravel()
+        system.reset_frames()
+        assert abs(system.evaluate(naive) - energy) > 1e-3 * energy
+    # an equilibrium (the stress-free state, turned) placed for a push: feet where made
+    tilted = rigid_motion(system, np.array(st.initial_state(), dtype=float),
+                          np.array([[1.0, 0.0, 0.0], [0.0, 0.6, -0.8], [0.0, 0.8, 0.6]]),
+                          np.array([0.1, 0.0, 0.2]))
+    placed = placed_for_push(sheet, st, tilted, 1)
+    assert np.allclose(st.positions_of(placed), sheet.mesh.positions, atol=1e-12)
+
+
+@pytest.mark.parametrize("tiling", ["square", "triangle", "hexagon"])
+def test_apex_heights_are_a_property_of_the_shape_not_of_its_placement(tiling):
+    """A cell's apex height is measured along its own normal: a sheet turned over (a proper
+    rotation by 180 degrees about an in-plane axis) or rolled on its side keeps every
+    height, and a cell whose apex sits below its sides' plane reads negative, in any
+    placement (the global z alone read a turned-over sheet's as-made cells as snapped)."""
+    sheet = build_sheet(G, tiling, (2, 2), nodes=11)
+    X = np.array(sheet.mesh.positions, dtype=float)
+    # a made-up shape: every other cell's apex pushed through to -h/2, the sheet bent
+    P = X.copy()
+    for k in range(0, sheet.n_cells, 2):
+        P[sheet.apex[k], 2] = -0.5 * G.h
+    P[:, 2] += 0.5 * (P[:, 0] - P[:, 0].mean()) ** 2  # a curvature of 1 / m along x
+    h = apex_heights(sheet, P)
+    assert np.all(h[0::2] < 0.0) and np.all(h[1::2] > 0.0)
+    rng = np.random.default_rng(7)
+    for R in (np.diag([1.0, -1.0, -1.0]),  # turned over
+              np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]),  # on its side
+              np.linalg.qr(rng.standard_normal((3, 3)))[0]):
+        R = R * np.sign(np.linalg.det(R))  # proper rotations only
+        moved = P @ R.T + np.array([0.3, -0.1, 0.2])
+        assert np.allclose(apex_heights(sheet, moved), h, atol=1e-12)
+    # and on a flat sheet, as made, the height above the midpoints' mean is h
+    assert np.allclose(apex_heights(sheet, X + 1.0), G.h)
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"tiling": "pentagon"}, "tiling must be one of"),
     ({"cells": (0, 3)}, "cells must be"),

@@ -138,7 +138,7 @@ def test_protocol_and_its_steps_are_checked(single):
         simulate_sheet(single, [0], protocol="force")
     for steps in (0, -3, 2.5, True, 10**6):
         with pytest.raises(ValueError, match=r"steps .* must be an integer in \[1, 100000\]"):
-            simulate_sheet(single, [0], steps=steps)
+            simulate_sheet(single, [0], steps=steps, protocol="mgdc")
     # the rig's increments must resolve the peak and the negative force (5 answered
     # "monostable" for this cell, which snaps)
     for steps in (5, 19, 2.5):
@@ -198,3 +198,15 @@ def test_cli_pushes_with_the_rig_and_records_the_protocol(tmp_path, capsys):
     assert main(["sheet", "--L", "100", "--h", "40", "--t", "0.5", "--w", "5", "--cells", "1x1",
                  "--order", "0", "--protocol", "force"]) == 2
     assert "--protocol" in capsys.readouterr().err
+
+
+def test_f_cr_is_the_first_maximum_not_the_force_of_a_cell_pushed_on():
+    """A cell that does not snap and is pushed on until its arches stretch: F rises past its
+    first peak again; F_cr is the first peak (the vertex of its parabola), and a wiggle of
+    less than 5 % is no peak."""
+    d = np.linspace(0.0, 0.02, 11)
+    F = np.array([0.0, 1.0, 1.5, 1.6, 1.58, 1.62, 1.2, 0.6, 0.3, 2.0, 9.0])
+    assert sheet_rig._first_peak(F) == 5  # 1.6 -> 1.58 is a wiggle
+    F_cr, d_cr = sheet_rig._peak(d, F, [])
+    assert 1.62 <= F_cr < 1.7 and d[4] < d_cr < d[6]
+    assert np.isnan(sheet_rig._peak(d, np.linspace(0.0, 3.0, 11), [])[0])  # never peaks
