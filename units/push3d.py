@@ -344,8 +344,7 @@ def relax_released(st, q, max_iter=400, descent=None):
                 amp = float(np.max(np.abs(st.positions_of(probe) - st.positions_of(qr))))
                 system.increment(start, v, 1e-2 * length / max(amp, 1e-300))
             qd = (descend if descent is None else descent)(st, start, max_iter=max_iter)
-            _, info = st.solve_equilibrium(qd, node=None)
-            qr = np.array(info["state"])
+            qr = _equilibrium_at(st, qd)
             neg = _negative_eigenvalues(system, qr)
         except Exception as exc:  # noqa: BLE001
             why = f"no stable equilibrium found without the actuator ({exc})"
@@ -357,6 +356,30 @@ def relax_released(st, q, max_iter=400, descent=None):
         return qr, neg, moved, (f"the released state has {neg} negative eigenvalue(s) of its "
                                 "tangent stiffness"), first
     return qr, neg, moved, "", first
+
+
+def _equilibrium_at(st, q):
+    """The equilibrium Newton finds from the descent's end ``q`` (full state, canonical
+    twists). Where Newton from a fresh system fails, ``q`` itself when the energy descent
+    with the reference frames carried after every step (`Structure3D.relax`) finds it an
+    equilibrium, moving no node by more than 1e-9 of the size: a fresh system reads the
+    twists about the stress-free directors carried to each tangent in one transport, which
+    is singular at an edge turned by nearly 180 degrees (a sheet rolled up: there Newton
+    did not converge in 40 iterations, and with the frames carried converged in 2).
+    Raises what Newton raised otherwise."""
+    try:
+        _, info = st.solve_equilibrium(q, node=None)
+        return np.array(info["state"])
+    except Exception:  # noqa: BLE001 - checked with the frames carried, or re-raised
+        try:
+            qr, _ = st.relax(q)
+        except Exception:  # noqa: BLE001
+            qr = None
+        length = st.scales()[0]
+        if qr is None or float(np.max(np.abs(st.positions_of(qr) - st.positions_of(q)))) \
+                > 1e-9 * length:
+            raise
+        return np.array(q, dtype=float)
 
 
 def level(positions, nodes, reference):

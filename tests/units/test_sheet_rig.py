@@ -210,3 +210,25 @@ def test_f_cr_is_the_first_maximum_not_the_force_of_a_cell_pushed_on():
     F_cr, d_cr = sheet_rig._peak(d, F, [])
     assert 1.62 <= F_cr < 1.7 and d[4] < d_cr < d[6]
     assert np.isnan(sheet_rig._peak(d, np.linspace(0.0, 3.0, 11), [])[0])  # never peaks
+
+
+def test_a_release_accepts_an_equilibrium_newton_cannot_check(single, monkeypatch):
+    """Where Newton from a fresh system fails at the end of a release's descent (a sheet
+    rolled so far that an edge has turned by nearly 180 degrees), the descent's state
+    stands when the descent with the frames carried (`relax`) does not move it; a state
+    that is no equilibrium still raises."""
+    from snapmorph.solver.problem import ConvergenceError
+
+    st = sheet_structure(single)
+    q = np.array(st.initial_state(), dtype=float)  # an equilibrium
+
+    def no_newton(*args, **kwargs):
+        raise ConvergenceError("equilibrium not found (test)")
+
+    monkeypatch.setattr(type(st), "solve_equilibrium", no_newton)
+    assert np.array_equal(push3d._equilibrium_at(st, q), q)
+    bent = q.copy()
+    st.reduced_system().increment(bent, np.random.default_rng(2).standard_normal(
+        st.reduced_system().n), 1e-3)
+    with pytest.raises(ConvergenceError, match="test"):
+        push3d._equilibrium_at(st, bent)
