@@ -35,9 +35,12 @@ JUMP_FACTOR = 3.0
 #: shortened) by more than this (PETG's elastic range ends near 50 MPa / 2.2 GPa = 2.3 %;
 #: a cell that snaps stays below 0.03 %)
 STRETCH_LIMIT = 0.02
-#: the descent kicks along a negative mode only where the gradient is below this many
-#: times its tolerance (next to a stationary point; `minimize_energy`)
+#: the descent kicks along a negative mode only next to a stationary point: where the
+#: gradient is below this many times its tolerance, or below `KICK_FRACTION` of the
+#: descent's first (the tolerance alone lies below the round-off floor of a large sheet's
+#: gradient, ~1e-8 N: a 6 x 6 sheet's release then never kicked off its saddle)
 KICK_FORCE = 1e4
+KICK_FRACTION = 1e-3
 #: the descent's iteration cap per increment (a jump across a snap was seen to take ~400)
 MAX_ITER = 2000
 
@@ -65,7 +68,11 @@ def minimize_energy(system, q, tol_force, tol_disp, max_iter=MAX_ITER, max_move=
         K = np.array(system.band[:, :n])  # a banded factorisation overwrites it
         shifted = not (system.factor() and system.negative_eigenvalues == 0)
         kick = None
-        if shifted and not kicked and float(np.max(np.abs(g))) <= KICK_FORCE * tol_force:
+        g_max = float(np.max(np.abs(g)))
+        if it == 0:
+            g_start = g_max
+        if shifted and not kicked and g_max <= max(KICK_FORCE * tol_force,
+                                                   KICK_FRACTION * g_start):
             # the first time K is indefinite next to a stationary point: also step along a
             # mode of negative curvature (at a symmetric saddle the gradient has no
             # component along it, and the shifted steps alone would leave the saddle only
