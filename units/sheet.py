@@ -297,7 +297,7 @@ def _not_run(cell, prev):
                      0.0, prev.pushed, equilibrium=False)
 
 
-def _step(sheet, boundary, released, cell, q, steps, protocol="mgdc"):
+def _step(sheet, boundary, released, cell, q, steps, protocol=DEFAULT_PROTOCOL):
     """Push ``cell`` from the released state ``q`` by ``protocol`` and release it: a
     `SheetStep`."""
     t0 = time.perf_counter()
@@ -401,11 +401,8 @@ def shape_distance(a, b) -> float:
     that best superposes them (Kabsch, least squares): 0 for the same shape however it is
     placed."""
     A, B = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    ca, cb = A.mean(axis=0), B.mean(axis=0)
-    U, _, Vt = np.linalg.svd((B - cb).T @ (A - ca))
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
-    R = U @ D @ Vt
-    return float(np.max(np.linalg.norm((B - cb) @ R - (A - ca), axis=1)))
+    R, shift = rigid_fit(B, A)
+    return float(np.max(np.linalg.norm(B @ R.T + shift - A, axis=1)))
 
 
 def _orders(cells, orders, seed):

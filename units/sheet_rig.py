@@ -63,12 +63,12 @@ def minimize_energy(system, q, tol_force, tol_disp, max_iter=MAX_ITER, max_move=
         g = np.array(system.grad[:n])
         if not np.all(np.isfinite(g)):
             raise RuntimeError("the energy's gradient is not finite")
-        if float(np.max(np.abs(g))) <= tol_force or du_last <= tol_disp:
+        g_max = float(np.max(np.abs(g)))
+        if g_max <= tol_force or du_last <= tol_disp:
             return it
         K = np.array(system.band[:, :n])  # a banded factorisation overwrites it
         shifted = not (system.factor() and system.negative_eigenvalues == 0)
         kick = None
-        g_max = float(np.max(np.abs(g)))
         if it == 0:
             g_start = g_max
         if shifted and not kicked and g_max <= max(KICK_FORCE * tol_force,
@@ -209,7 +209,7 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
     held = c.member_dofs[:, c.axis]
     sign = float(c.direction[c.axis])
     length, fscale = st.scales()
-    tol_force, tol_disp, max_move = 1e-9 * fscale, 1e-11 * length, 0.05 * length
+    tols = (1e-9 * fscale, 1e-11 * length, 0.05 * length)  # force N, move m, step cap m
     dd = (d_end - d_start) / max(int(increments), 1)
     q_now = np.array(q, dtype=float)
     ds, Fs, jumps, total = [d_start], [0.0], [], 0
@@ -218,19 +218,16 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
     status = f"monostable: F > 0 over the whole push (to d = {d_end:.6g} m)"
     for k in range(1, max(int(increments), 1) + 1):
         d = d_start + k * dd
-        system.reset_frames()
         try:
-            guess, predicted = _predict(system, st, q_now, held, sign * dd, max_move)
-            total += minimize_energy(system, guess, tol_force, tol_disp, max_move=max_move)
+            F, q_new, its, predicted = _held_state(system, st, c, held, q_now, sign * dd,
+                                                   tols)
+        except _Unstable:
+            status = f"not converged: the state at d = {d:.6g} m is not stable with the apex held"
+            break
         except RuntimeError as exc:
             status = f"not converged: the rig's descent at d = {d:.6g} m: {exc}"
             break
-        system.evaluate(guess)
-        if not (system.factor() and system.negative_eigenvalues == 0):
-            status = f"not converged: the state at d = {d:.6g} m is not stable with the apex held"
-            break
-        F = float(c.force(system))
-        q_new = canonical(system, guess)
+        total += its
         # a jump: the state moved much further than the tangent said (a free sheet's far
         # nodes swing by a lever's multiple of the increment on a smooth branch too)
         moved = float(np.max(np.abs(st.positions_of(q_new) - st.positions_of(q_now))))
@@ -265,8 +262,7 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
                 lo, hi = (ds[-2], Fs[-2], q_before), (d, F, q_now)
                 try:
                     d, F, q_now, its = _zero_force_state(system, st, c, held, sign, lo, hi,
-                                                         tol_force, tol_disp, max_move,
-                                                         max(Fs))
+                                                         tols, max(Fs))
                     total += its
                     ds[-1], Fs[-1], strains[-1] = d, F, stretch(st, q_now)
                 except RuntimeError:
@@ -279,26 +275,42 @@ def rig_push(st, apex, q, d_start, d_end, increments) -> RigPush:
                    stretch=np.asarray(strains))
 
 
-def _zero_force_state(system, st, c, held, sign, lo, hi, tol_force, tol_disp, max_move,
-                      F_scale, max_iter=8):
+class _Unstable(RuntimeError):
+    """A held state the descent reached is not stable with the apex held."""
+
+
+def _held_state(system, st, c, held, q, step, tols):
+    """The stable equilibrium with the held DOFs moved by ``step`` (m) from the stable held
+    state ``q``: the tangent predictor (`_predict`), then the energy descent
+    (`minimize_energy`; ``tols``: its force tolerance N, displacement tolerance m and step
+    cap m). Returns (F N, the state with canonical twists, iterations, the predicted
+    largest node move m); raises `_Unstable` when the state reached has a negative pivot
+    with the apex held, RuntimeError when the descent fails."""
+    tol_force, tol_disp, max_move = tols
+    system.reset_frames()
+    guess, predicted = _predict(system, st, q, held, step, max_move)
+    its = minimize_energy(system, guess, tol_force, tol_disp, max_move=max_move)
+    system.evaluate(guess)
+    if not (system.factor() and system.negative_eigenvalues == 0):
+        raise _Unstable("the held state is not stable")
+    return float(c.force(system)), canonical(system, guess), its, predicted
+
+
+def _zero_force_state(system, st, c, held, sign, lo, hi, tols, F_scale, max_iter=8):
     """(d, F, full state, Newton iterations) of the held state with F = 0 between ``lo`` and
     ``hi`` ((d m, F N, full state): F < 0 at lo, >= 0 at hi, the branch smooth between), by
-    regula falsi (Illinois) from lo's state, to |F| <= 1e-6 ``F_scale``; the end returned
-    is the bracket's F >= 0 one. Raises RuntimeError when a solve fails or is unstable."""
+    regula falsi (Illinois) from lo's state (`_held_state`; ``tols`` as there), to
+    |F| <= 1e-6 ``F_scale``; the end returned is the bracket's F >= 0 one. Raises
+    RuntimeError when a solve fails or is unstable."""
     total, side = 0, 0
     F_lo, F_hi = lo[1], hi[1]
     for _ in range(max_iter):
-        if hi[1] <= 1e-6 * F_scale or abs(hi[0] - lo[0]) <= tol_disp:
+        if hi[1] <= 1e-6 * F_scale or abs(hi[0] - lo[0]) <= tols[1]:
             break
         d = lo[0] + (hi[0] - lo[0]) * (-F_lo) / (F_hi - F_lo)
-        system.reset_frames()
-        guess, _ = _predict(system, st, lo[2], held, sign * (d - lo[0]), max_move)
-        total += minimize_energy(system, guess, tol_force, tol_disp, max_move=max_move)
-        system.evaluate(guess)
-        if not (system.factor() and system.negative_eigenvalues == 0):
-            raise RuntimeError("an unstable held state inside the bracket")
-        F = float(c.force(system))
-        state = (d, F, canonical(system, guess))
+        F, q, its, _ = _held_state(system, st, c, held, lo[2], sign * (d - lo[0]), tols)
+        total += its
+        state = (d, F, q)
         if F >= 0.0:
             hi, F_hi = state, F
             F_lo = lo[1] if side != 1 else 0.5 * F_lo  # Illinois: halve the stale end
