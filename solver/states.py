@@ -69,10 +69,12 @@ class DisplacementProbe:
 
 
 def refine_maximum(probe, d, F, positions, i, tol_d=None):
-    """Maximum of F(d) near path sample ``i`` (a local maximum of F): Brent's bounded search
-    (golden section with parabolic steps, `scipy.optimize.minimize_scalar`) on d in
-    [d[i-1], d[i+1]] with displacement-controlled solves. Returns (F_max, d_max), and leaves
-the full state at d_max in ``probe.last_state``.
+    """Maximum of F(d) near path sample ``i`` (a local maximum of F) on d in [d[i-1], d[i+1]]
+    with displacement-controlled solves: successive parabolas from the three samples
+    (`_parabolic_maximum`), Brent's bounded search (golden section with parabolic steps,
+    `scipy.optimize.minimize_scalar`) where they do not close in. ``tol_d`` (m): how close
+    d_max is located. Returns (F_max, d_max), and leaves the full state at d_max in
+    ``probe.last_state``.
 
     Each solve starts from the path's own states, interpolated to the solve's d by the
     parabola through the three samples (the state is a smooth function of d on the branch,
@@ -104,12 +106,105 @@ the full state at d_max in ``probe.last_state``.
             states[x] = getattr(probe, "last_state", None)
         return cache[x]
 
-    res = scipy.optimize.minimize_scalar(lambda x: -f(x), bounds=(a, b), method="bounded",
-                                         options={"xatol": 0.5 * tol_d, "maxiter": 60})
-    x = float(res.x)
+    found = _parabolic_maximum(f, ds, Fs, tol_d)
+    if found is None:  # the parabolas do not close in: Brent's safeguarded search
+        res = scipy.optimize.minimize_scalar(lambda x: -f(x), bounds=(a, b), method="bounded",
+                                             options={"xatol": 0.5 * tol_d, "maxiter": 60})
+        found = float(res.x)
+    x = found
     F_max = f(x)
     probe.last_state = states[x]  # the state at the maximum, for the caller
     return F_max, x
+
+
+#: `_parabolic_maximum`: the most vertices it solves at before it gives up
+PARABOLIC_STEPS = 8
+
+
+def _parabolic_maximum(f, ds, Fs, tol_d):
+    """d of the maximum of f by interpolation from the three path samples (ds, Fs) that
+    bracket it: the maximum of the polynomial through the (up to) four points nearest the
+    highest is solved at (``f``), until an estimate lies within ``tol_d`` of the one
+    before; it is solved at too. The first estimate is the vertex of the samples' parabola,
+    the later ones a cubic's maximum, which follows a lopsided peak (a parabola over the
+    samples' width does not). Returns the d of the highest solve, or None when an estimate
+    leaves the bracket or is not a maximum, or when the slope between the last two solves
+    puts the maximum further than ``tol_d`` from them (`_settled`): the caller takes Brent's
+    search then. Where F is smooth on the branch it solves three times, where the bounded
+    Brent search, which starts on golden sections, solves eight to ten."""
+    lo, hi = float(ds[0]), float(ds[2])
+    pts = sorted((float(x), float(v)) for x, v in zip(ds, Fs))
+    solved, last = [], None
+    for _ in range(PARABOLIC_STEPS):
+        best = max(pts, key=lambda p: p[1])[0]
+        near = sorted(sorted(pts, key=lambda p: abs(p[0] - best))[:4])
+        estimate = _polynomial_maximum(near, lo, hi)
+        if estimate is None:
+            return None
+        close = last is not None and abs(estimate - last) <= tol_d
+        solved.append((f(estimate), estimate))
+        if close:
+            # two estimates agree; the slope between their solves must agree too, or the
+            # samples' wide polynomial misled both (a sharp peak between far samples)
+            return max(solved)[1] if _settled(solved[-2:], near, tol_d) else None
+        pts = sorted(pts + [(estimate, solved[-1][0])])
+        last = estimate
+    return None
+
+
+def _settled(pair, near, tol_d):
+    """Does the maximum lie within ``tol_d`` of the last two solves ``pair`` ((F, d), their
+    d within tol_d)? The Newton step -F' / F'' from their midpoint, F' their chord's slope
+    and F'' the curvature of the parabola through the points ``near`` (the last estimate's
+    polynomial points) nearest to them."""
+    (Fa, xa), (Fb, xb) = sorted(pair, key=lambda p: p[1])
+    if xb - xa <= 0.0:
+        return True
+    xm = 0.5 * (xa + xb)
+    three = sorted(sorted(near, key=lambda p: abs(p[0] - xm))[:3])
+    (x0, y0), (x1, y1), (x2, y2) = three
+    if not x0 < x1 < x2:
+        return False
+    curvature = 2.0 * ((y2 - y1) / (x2 - x1) - (y1 - y0) / (x1 - x0)) / (x2 - x0)
+    if not curvature < 0.0:
+        return False
+    return abs((Fb - Fa) / (xb - xa) / curvature) <= tol_d
+
+
+def _polynomial_maximum(pts, lo, hi):
+    """d in (lo, hi) of the interior maximum of the polynomial through the (d, F) points
+    (three or four, distinct d) nearest the highest of them; None when it has none. In
+    closed form (Newton's divided differences; p' a quadratic) on d centred and scaled."""
+    x0 = pts[0][0]
+    scale = pts[-1][0] - x0
+    if not scale > 0.0:
+        return None
+    u = [(p[0] - x0) / scale for p in pts]
+    y = [p[1] for p in pts]
+    if any(b <= a for a, b in zip(u, u[1:])):
+        return None
+    # divided differences a1, a2, a3 of p(u) = y0 + a1 u + a2 u (u - u1) + a3 u (u - u1)(u - u2)
+    d1 = [(y[k + 1] - y[k]) / (u[k + 1] - u[k]) for k in range(len(u) - 1)]
+    d2 = [(d1[k + 1] - d1[k]) / (u[k + 2] - u[k]) for k in range(len(d1) - 1)]
+    a1, a2 = d1[0], d2[0]
+    a3 = (d2[1] - d2[0]) / (u[3] - u[0]) if len(u) == 4 else 0.0
+    u1, u2 = u[1], (u[2] if len(u) == 4 else 0.0)
+    s1, s2 = u1 + u2, u1 * u2  # of the nodes 0, u1, u2
+    # p'(u) = A u^2 + B u + C, p''(u) = 2 A u + B
+    A, B, C = 3.0 * a3, 2.0 * a2 - 2.0 * a3 * s1, a1 - a2 * u1 + a3 * s2
+    if A == 0.0 or abs(A) <= 1e-12 * (abs(B) + abs(C)):
+        roots = [] if B == 0.0 else [-C / B]
+    else:
+        disc = B * B - 4.0 * A * C
+        if disc < 0.0:
+            return None
+        q = -0.5 * (B + np.copysign(np.sqrt(disc), B))
+        roots = [q / A] + ([C / q] if q != 0.0 else [])
+    top = (pts[int(np.argmax(y))][0] - x0) / scale
+    maxima = [r for r in roots if 2.0 * A * r + B < 0.0 and lo < x0 + r * scale < hi]
+    if not maxima:
+        return None
+    return x0 + min(maxima, key=lambda r: abs(r - top)) * scale
 
 
 def _on_parabola(ds, values, x):

@@ -514,35 +514,14 @@ class Structure(ConstrainedStructure):
         rep, fixed = self._held(extra_fixed)
         uniq, group = np.unique(rep, return_inverse=True)
         n_groups = len(uniq)
-        rows, cols = [], []
-        for conn in (elements[0], elements[2], elements[4]):
-            if conn.shape[0] == 0:
-                continue
-            g = group[conn]
-            for i in range(g.shape[1]):
-                for j in range(g.shape[1]):
-                    if i != j:
-                        rows.append(g[:, i])
-                        cols.append(g[:, j])
-        if rows:
-            r = np.concatenate(rows)
-            c = np.concatenate(cols)
-            graph = scipy.sparse.csr_matrix(
-                (np.ones(len(r)), (r, c)), shape=(n_groups, n_groups)
-            )
-            order = scipy.sparse.csgraph.reverse_cuthill_mckee(graph, symmetric_mode=True)
-        else:
-            order = np.arange(n_groups)
-
+        order = _rcm_order(group, n_groups, (elements[0], elements[2], elements[4]))
         group_fixed = np.zeros((n_groups, 2), dtype=bool)
         group_fixed[group] = fixed
-        group_dof = -np.ones((n_groups, 2), dtype=np.int64)
-        k = 0
-        for gidx in order:
-            for comp in range(2):
-                if not group_fixed[gidx, comp]:
-                    group_dof[gidx, comp] = k
-                    k += 1
+        # the free components numbered in RCM order, x before z within a node
+        free = ~group_fixed[order]
+        group_dof = np.empty((n_groups, 2), dtype=np.int64)
+        group_dof[order] = np.where(free, np.cumsum(free.ravel()).reshape(-1, 2) - 1, -1)
+        k = int(free.sum())
         dof_map = group_dof[group].reshape(-1)
         if k == 0:
             raise ValueError("every degree of freedom is fixed: nothing to solve")
@@ -653,3 +632,49 @@ def _turning_curvatures(xz):
     cross = e0[:, 0] * e1[:, 1] - e0[:, 1] * e1[:, 0]
     g = np.hypot(e0[:, 0], e0[:, 1]) * np.hypot(e1[:, 0], e1[:, 1]) + np.sum(e0 * e1, axis=1)
     return 2.0 * cross / g
+
+
+#: `_rcm_order`'s memory: (key, order) of the last orderings computed (a unit's pushes,
+#: probes, released and snap-back structures share their graphs)
+_RCM_MEMO: list = []
+_RCM_MEMO_SIZE = 8
+
+
+def _rcm_order(group, n_groups, connectivity):
+    """Reverse Cuthill-McKee order of the groups of nodes (``group``: each node's group)
+    joined by the elements' ``connectivity`` (node index arrays (n_elements, k)). Depends
+    on the graph alone, not on which components are held: remembered for the last few
+    graphs (the key holds the arrays' bytes, so equal graphs get the same order)."""
+    key = (n_groups, group.tobytes(), *(c.tobytes() + bytes(str(c.shape), "ascii")
+                                        for c in connectivity))
+    for k, order in _RCM_MEMO:
+        if k == key:
+            return order
+    rows, cols = [], []
+    for conn in connectivity:
+        if conn.shape[0] == 0:
+            continue
+        g = group[conn]
+        for i in range(g.shape[1]):
+            for j in range(g.shape[1]):
+                if i != j:
+                    rows.append(g[:, i])
+                    cols.append(g[:, j])
+    if rows:
+        r = np.concatenate(rows)
+        c = np.concatenate(cols)
+        # the canonical CSR graph scipy builds from these (row, col) pairs (duplicates
+        # summed, columns sorted in each row), without its general conversion
+        pairs = np.unique(r.astype(np.int64) * n_groups + c)
+        indptr = np.zeros(n_groups + 1, dtype=np.int32)
+        np.cumsum(np.bincount(pairs // n_groups, minlength=n_groups), out=indptr[1:])
+        graph = scipy.sparse.csr_matrix(
+            (np.ones(len(pairs)), (pairs % n_groups).astype(np.int32), indptr),
+            shape=(n_groups, n_groups))
+        order = scipy.sparse.csgraph.reverse_cuthill_mckee(graph, symmetric_mode=True)
+    else:
+        order = np.arange(n_groups)
+    order.setflags(write=False)
+    _RCM_MEMO.append((key, order))
+    del _RCM_MEMO[:-_RCM_MEMO_SIZE]
+    return order

@@ -18,7 +18,7 @@ import numpy as np
 import scipy.linalg
 
 from snapmorph.solver.assembly import (assemble_dead_loads, assemble_system, element_dofs,
-                                      load_record, no_loads)
+                                       load_record, no_loads, stiff_second_difference)
 from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws, element_dofs3d
 from snapmorph.solver.banded import (band_to_dense, envelope_heights, ldlt_factor_envelope,
                                      ldlt_solve_envelope)
@@ -230,6 +230,12 @@ class BandedSystem:
         if status != 1:
             self.negative_eigenvalues = int(neg)
 
+    def stiff_second_difference(self, q, du):
+        """g(q + du) + g(q - du) - 2 g(q) of the stiff terms of the reduced gradient (N), du a
+        reduced increment, the assembled K and its factorisation left as they are (the
+        second-order predictor of `solver.mgdc`); None where the system does not give it."""
+        return None
+
     def accept(self, q):
         """Hook called by the path followers after every accepted state (and after a
         reroute): nothing to carry along here (3-D rods update their frames)."""
@@ -290,6 +296,17 @@ class ReducedSystem(BandedSystem):
                                  self.grad_full)
         self.energy = self._with_loads(q, energy)
         return self.energy
+
+    def stiff_second_difference(self, q, du):
+        """g(q + du) + g(q - du) - 2 g(q) of the stretching and bond-spring terms of the
+        reduced gradient (N) (`solver.assembly.stiff_second_difference`); K and its
+        factorisation are left as they are. Returns a new array."""
+        plus, minus = np.array(q, dtype=float), np.array(q, dtype=float)
+        self.increment(plus, du)
+        self.increment(minus, du, -1.0)
+        out = np.empty(self.n)
+        stiff_second_difference(q, plus, minus, self.elements, self.dofs, out)
+        return out
 
 
 class RodSystem3D(BandedSystem):

@@ -42,7 +42,8 @@ from snapmorph.solver.states import DisplacementProbe
 from snapmorph.units import status as statuses
 from snapmorph.units.geometry import (DEFAULT_NODES, PETG_E, SUPPORT_OFFSET, UnitGeometry,
                                       build_unit, check_nodes, check_real)
-from snapmorph.units.metrics import largest_strain, most_negative_force, snap_back, strain_place
+from snapmorph.units.metrics import (largest_strain, most_negative_force, snap_back,
+                                     strain_on_path, strain_place)
 from snapmorph.units.push_through import Rules, parabola_peak, push_through, snap_crossings
 # the one crossing rule of every unit, under the names the tests check
 from snapmorph.units.push_through import (  # noqa: F401
@@ -75,6 +76,9 @@ MGDC_STEPS = 20
 PATH_TOL_DISP = 1e-9
 #: the default ``steps`` of a displacement-controlled push (its steps are where it samples)
 RIG_STEPS = 60
+#: the MGDC predictor of the unit's pushes (`solver.mgdc.follow_mgdc`): with the path's
+#: curvature term the corrector takes 3 iterations a step where the tangent's takes 4-5
+PATH_PREDICTOR = "second-order"
 #: the peak searches' bracket (F_cr, F_min), a fraction of the path's spacing at 60 steps
 PEAK_TOL = 2e-3
 TIES = ("exact", "spring")
@@ -346,7 +350,7 @@ class _PlanarPush:
             limited.append(rows["d"][-1] >= self.limit)
             return limited[-1]
         if mgdc:
-            options = dict(options, tol_disp=PATH_TOL_DISP)
+            options = dict(options, tol_disp=PATH_TOL_DISP, predictor=PATH_PREDICTOR)
         path = st.push(self.model.apex, DOWN, self.distance, stop=stop, **options)
         if path.status.startswith("timeout") or (late is not None and late()):
             raise _Timeout(f"while following the path ({len(path.force)} steps)")
@@ -571,13 +575,13 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
         pusher.probe, *out.curve, path.positions, i_pk, end, _PlanarPush.failures, tol)
     rods = {"arch": arch, "base": base}
     X = st.reference_positions
-    states = np.concatenate([path.positions[:end + 1], [*out.states.values()]]) \
-        if out.states else path.positions[:end + 1]
+    # the snap path's samples with the states (i), (ii), (iii) in their places along it
+    # (exact equilibria between two samples), for the largest strain
+    d_path, states = _with_states(out, path, end)
     top, rod, node, k, series = largest_strain(states, X, rods, g.t)
-    result.strain_max = top
-    if k <= end:  # on the path: between samples, the vertex of the parabola through three
-        d = out.curve[0]
-        result.strain_max = max(top, parabola_peak(d[:end + 1], series[:end + 1], k)[0])
+    # located between the samples by displacement-controlled solves
+    result.strain_max = strain_on_path(pusher.probe, d_path, series, states, k, X, rods, g.t,
+                                       _PlanarPush.failures, tol)
     result.strain_where = strain_place(rod, X[rods[rod][node], 0], g.L)
     if "iii" not in out.states:  # no second state: monostable, or the path failed
         result.status, result.reason = out.status, out.reason
@@ -619,6 +623,35 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
             _snap_back(result, g, nodes, tie, tie_stiffness, released, push["steps"],
                        deadline)
     return result
+
+
+def _with_states(out, path, end):
+    """(d (K,), positions (K, n_nodes, 2)): the path's samples 0..``end`` with the states
+    (i), (ii) and (iii) of ``out`` (a `PushOutcome`) inserted where they lie: (i) next to
+    the peak sample on the side of d_cr, (ii) and (iii) inside the sample brackets of their
+    zero crossings. States not found are left out."""
+    d = list(np.asarray(out.curve[0][:end + 1], float))
+    P = list(np.asarray(path.positions[:end + 1], float))
+    places = []
+    if "i" in out.states and out.peak is not None and np.isfinite(out.d_cr) \
+            and out.d_cr != d[out.peak]:
+        places.append((out.peak + (1 if out.d_cr > d[out.peak] else 0), out.d_cr, "i"))
+    j, k = out.crossings
+    for name, at, depth in (("ii", j, out.d_unstable), ("iii", k, out.d_second)):
+        if name in out.states and at is not None and at <= end and np.isfinite(depth):
+            places.append((at, depth, name))
+    for at, depth, name in sorted(places, key=lambda p: -p[0]):
+        state = np.asarray(out.states[name], float)
+        # a state closer to a sample than a quarter of their bracket takes its place: a
+        # near-double point leaves the searches between samples nothing to interpolate on
+        lo, hi = d[at - 1], d[at] if at < len(d) else d[at - 1]
+        near = at - 1 if abs(depth - lo) <= abs(depth - hi) else at
+        if near < len(d) and abs(depth - d[near]) < 0.25 * abs(hi - lo):
+            d[near], P[near] = float(depth), state
+        else:
+            d.insert(at, float(depth))
+            P.insert(at, state)
+    return np.asarray(d), np.asarray(P)
 
 
 def _snap_back(result, g, nodes, tie, tie_stiffness, released, steps, deadline):

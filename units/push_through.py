@@ -104,14 +104,20 @@ def zero_crossings(d, F, start=0, neg=None):
     0 (unknown, e.g. a sample inserted by a displacement-controlled search) and ``neg`` None
     fall back on the sign of dF/dd between the two samples (a path running backwards in d
     flips it): right while d increases, but on a path that snaps back (d decreasing) past a
-    turning point of d the chord's slope misreads an unstable state as a stable one."""
+    turning point of d the chord's slope misreads an unstable state as a stable one. Counts
+    that differ while d increases mean a force extremum between the samples, on either side
+    of the zero: the nearer sample can be on the wrong side (a unit whose F_min lies just
+    before its second zero, stepped over in one step, read its stable state (iii) as a
+    second unstable one and was called monostable), and the chord's slope, which is the
+    slope at the zero there, decides."""
     out = []
     for i in range(max(start, 0) + 1, len(F)):
         if i == 1 and F[0] == 0.0:
             continue  # the unloaded start is not a crossing
         if (F[i - 1] >= 0.0 > F[i]) or (F[i - 1] <= 0.0 < F[i]):
             count = -1
-            if neg is not None:
+            if neg is not None and neg[i - 1] >= 0 and neg[i] >= 0 and (
+                    neg[i - 1] == neg[i] or d[i] <= d[i - 1]):
                 count = neg[i] if abs(F[i]) < abs(F[i - 1]) else neg[i - 1]
             if count >= 0:
                 out.append((i, -1 if count > 0 else 1))

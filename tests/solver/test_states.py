@@ -1,6 +1,7 @@
 """The state searches of `solver.states` and their users' guards."""
 
 import numpy as np
+import pytest
 
 
 def test_refine_peak_at_the_last_sample_falls_back_without_an_index_error():
@@ -36,3 +37,43 @@ def test_refine_peak_keeps_the_sample_when_no_solve_rises_above_it():
     Q = np.zeros((3, 2, 2))
     assert parabola_peak(d, F, 1)[0] > 1.0  # what the old fallback answered
     assert refine_peak(Probe(), d, F, Q, 1, ()) == (1.0, 1.0, False)
+
+
+class _Peaked:
+    """A probe whose force is a known function of d (positions ignored)."""
+
+    def __init__(self, F):
+        self.F, self.last_state, self.calls = F, None, 0
+
+    def solve(self, guess, x):
+        self.calls += 1
+        self.last_state = np.asarray(guess).copy()
+        return guess, self.F(x), 0
+
+
+def _peak_search(F, d):
+    from snapmorph.solver.states import refine_maximum
+
+    probe = _Peaked(F)
+    Fs = np.array([F(x) for x in d])
+    tol = 1e-6 * (d[2] - d[0])
+    return (*refine_maximum(probe, d, Fs, np.zeros((3, 2, 2)), 1, tol_d=tol), probe.calls, tol)
+
+
+def test_refine_maximum_on_a_smooth_lopsided_peak_solves_three_times():
+    """A cubic's maximum from the samples and one solve: 3 solves, where Brent took 8-10."""
+    F = lambda x: 1.0 - (x - 0.3) ** 2 + 0.8 * (x - 0.3) ** 3  # noqa: E731
+    x_max = 0.3  # F'(0.3) = 0, F'' < 0
+    F_max, d_max, calls, tol = _peak_search(F, np.array([0.0, 0.4, 1.0]))
+    assert abs(d_max - x_max) <= tol
+    assert F_max == pytest.approx(1.0, abs=1e-12)
+    assert calls <= 4
+
+
+def test_refine_maximum_finds_a_sharp_peak_that_far_samples_misplace():
+    """A narrow peak (width 0.02) between samples 0.25 and 0.15 away is located to ten times
+    the search's tolerance (the units' sharp extrema: tests/units/test_path_resolution.py)."""
+    F = lambda x: 1.0 / (1.0 + ((x - 0.47) / 0.02) ** 2)  # noqa: E731
+    F_max, d_max, calls, tol = _peak_search(F, np.array([0.2, 0.45, 0.6]))
+    assert abs(d_max - 0.47) <= 10 * tol
+    assert F_max == pytest.approx(1.0, abs=1e-9)

@@ -30,9 +30,9 @@ def test_a_path_cut_by_the_step_cap_is_not_monostable(monkeypatch):
 
     push = structure.Structure.push
     monkeypatch.setattr(structure.Structure, "push",
-                        lambda self, *a, **k: push(self, *a, **dict(k, max_steps=30)))
+                        lambda self, *a, **k: push(self, *a, **dict(k, max_steps=12)))
     r = simulate_unit(UnitGeometry(**SPECIMEN))
-    assert r.status.startswith("not converged") and "30 steps" in r.status, r.status
+    assert r.status.startswith("not converged") and "12 steps" in r.status, r.status
     assert not statuses.answered(r.status) and statuses.exit_status(r.status) == 1
 
 

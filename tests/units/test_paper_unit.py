@@ -123,10 +123,14 @@ def test_mgdc_and_displacement_control_agree_on_the_unit_curve(specimen):
     assert r_disp.F_cr == pytest.approx(specimen.F_cr, rel=5e-3)
     assert r_disp.d_second == pytest.approx(specimen.d_second, rel=1e-6)
     assert r_disp.theta_deg == pytest.approx(specimen.theta_deg, abs=1e-6)
-    d = np.linspace(0.02, 0.95, 40) * specimen.d_second
-    f1 = np.interp(d, *specimen.curve)
-    f2 = np.interp(d, *r_disp.curve)
-    assert np.max(np.abs(f1 - f2)) < 0.01 * specimen.F_cr
+    # MGDC's samples up to state (iii) on the rig's denser curve (the specimen's path is
+    # monotone in d: the rig follows it); MGDC's steps are sized for the metrics, so its
+    # samples are compared, not a line between them
+    d, F = specimen.curve
+    keep = d <= specimen.d_second
+    assert np.all(np.diff(d[keep]) > 0)
+    f2 = np.interp(d[keep], *r_disp.curve)
+    assert np.max(np.abs(F[keep] - f2)) < 0.01 * specimen.F_cr
 
 
 def test_tie_springs_and_exact_ties_agree_within_a_tenth_of_a_percent(specimen):
