@@ -70,8 +70,8 @@ class DisplacementProbe:
 
 def refine_maximum(probe, d, F, positions, i, tol_d=None):
     """Maximum of F(d) near path sample ``i`` (a local maximum of F) on d in [d[i-1], d[i+1]]
-    with displacement-controlled solves: successive parabolas from the three samples
-    (`_parabolic_maximum`), Brent's bounded search (golden section with parabolic steps,
+    with displacement-controlled solves: the maxima of polynomials through the samples and
+    the solves (`_interpolated_maximum`), Brent's bounded search (golden section with parabolic steps,
     `scipy.optimize.minimize_scalar`) where they do not close in. ``tol_d`` (m): how close
     d_max is located. Returns (F_max, d_max), and leaves the full state at d_max in
     ``probe.last_state``.
@@ -106,22 +106,21 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
             states[x] = getattr(probe, "last_state", None)
         return cache[x]
 
-    found = _parabolic_maximum(f, ds, Fs, tol_d)
-    if found is None:  # the parabolas do not close in: Brent's safeguarded search
+    x = _interpolated_maximum(f, ds, Fs, tol_d)
+    if x is None:  # the polynomials do not close in: Brent's safeguarded search
         res = scipy.optimize.minimize_scalar(lambda x: -f(x), bounds=(a, b), method="bounded",
                                              options={"xatol": 0.5 * tol_d, "maxiter": 60})
-        found = float(res.x)
-    x = found
+        x = float(res.x)
     F_max = f(x)
     probe.last_state = states[x]  # the state at the maximum, for the caller
     return F_max, x
 
 
-#: `_parabolic_maximum`: the most vertices it solves at before it gives up
-PARABOLIC_STEPS = 8
+#: `_interpolated_maximum`: the most estimates it solves at before it gives up
+INTERPOLATION_STEPS = 8
 
 
-def _parabolic_maximum(f, ds, Fs, tol_d):
+def _interpolated_maximum(f, ds, Fs, tol_d):
     """d of the maximum of f by interpolation from the three path samples (ds, Fs) that
     bracket it: the maximum of the polynomial through the (up to) four points nearest the
     highest is solved at (``f``), until an estimate lies within ``tol_d`` of the one
@@ -135,7 +134,7 @@ def _parabolic_maximum(f, ds, Fs, tol_d):
     lo, hi = float(ds[0]), float(ds[2])
     pts = sorted((float(x), float(v)) for x, v in zip(ds, Fs))
     solved, last = [], None
-    for _ in range(PARABOLIC_STEPS):
+    for _ in range(INTERPOLATION_STEPS):
         best = max(pts, key=lambda p: p[1])[0]
         near = sorted(sorted(pts, key=lambda p: abs(p[0] - best))[:4])
         estimate = _polynomial_maximum(near, lo, hi)

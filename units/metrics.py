@@ -71,16 +71,17 @@ def largest_strain(positions, X, rods, t):
     return top, best[1], best[2], state, series
 
 
-class _Strained:
-    """A displacement probe whose solves are read as the largest surface strain of the
-    state (`largest_strain`) instead of the force."""
+class _Reading:
+    """A displacement probe whose solves report ``read(positions, F)`` instead of the force
+    F (the largest strain of the state, or -F: a minimum of F is a maximum of -F), for the
+    maximum searches (`push_through.refine_peak`)."""
 
-    def __init__(self, probe, X, rods, t):
-        self.probe, self.X, self.rods, self.t = probe, X, rods, t
+    def __init__(self, probe, read):
+        self.probe, self.read = probe, read
 
     def solve(self, guess, d):
-        pos, _, neg = self.probe.solve(guess, d)
-        return pos, largest_strain(pos, self.X, self.rods, self.t)[0], neg
+        pos, F, neg = self.probe.solve(guess, d)
+        return pos, self.read(pos, F), neg
 
     @property
     def last_state(self):
@@ -101,7 +102,8 @@ def strain_on_path(probe, d, series, positions, k, X, rods, t, failures, tol=2e-
     the specimen-class units' strain came out up to 1.7 % low."""
     from snapmorph.units.push_through import refine_peak
 
-    strained = None if probe is None else _Strained(probe, X, rods, t)
+    strained = None if probe is None else _Reading(
+        probe, lambda pos, F: largest_strain(pos, X, rods, t)[0])
     value = refine_peak(strained, d, series, positions, k, failures, tol)[0]
     return max(float(series[k]), float(value))
 
@@ -121,25 +123,6 @@ def strain_place(rod, x, L) -> str:
 
 
 # ---------------------------------------------------------------------------- F_min
-class _Negated:
-    """A displacement probe whose forces are negated (a minimum of F is a maximum of -F)."""
-
-    def __init__(self, probe):
-        self.probe = probe
-
-    def solve(self, guess, d):
-        pos, F, neg = self.probe.solve(guess, d)
-        return pos, -F, neg
-
-    @property
-    def last_state(self):
-        return self.probe.last_state
-
-    @last_state.setter
-    def last_state(self, q):
-        self.probe.last_state = q
-
-
 def most_negative_force(probe, d, F, Q, i_pk, end, failures, tol=2e-3):
     """(F_min N, d_Fmin m) of the snap path: the most negative F of the samples after the
     peak ``i_pk`` up to sample ``end`` (inclusive), refined by displacement-controlled
@@ -156,7 +139,7 @@ def most_negative_force(probe, d, F, Q, i_pk, end, failures, tol=2e-3):
         return NAN, NAN
     if 0 < m < len(F) - 1:
         neg_F = -np.asarray(F, float)
-        F_max, d_max, _ = refine_peak(None if probe is None else _Negated(probe), d, neg_F,
+        F_max, d_max, _ = refine_peak(None if probe is None else _Reading(probe, lambda pos, F: -F), d, neg_F,
                                       Q, m, failures, tol)
         return -F_max, d_max
     return float(F[m]), float(d[m])

@@ -44,7 +44,7 @@ from snapmorph.units.geometry import (DEFAULT_NODES, PETG_E, SUPPORT_OFFSET, Uni
                                       build_unit, check_nodes, check_real)
 from snapmorph.units.metrics import (largest_strain, most_negative_force, snap_back,
                                      strain_on_path, strain_place)
-from snapmorph.units.push_through import Rules, parabola_peak, push_through, snap_crossings
+from snapmorph.units.push_through import Rules, push_through, snap_crossings
 # the one crossing rule of every unit, under the names the tests check
 from snapmorph.units.push_through import (  # noqa: F401
     first_peak as _first_peak,
