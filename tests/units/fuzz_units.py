@@ -31,6 +31,20 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspa
 #: between the stages of simulate_unit; one Newton solve or a numba compilation cannot be cut
 MARGIN = 30.0
 PREFIXES = ("ok", "monostable", "second state unstable", "timeout", "not converged")
+#: the answered statuses (the rest are failures); their change between two resolutions is a
+#: flag flip
+ANSWERS = ("ok", "monostable", "second state unstable")
+
+
+def failure_record(kw, nodes, status, reason, seconds):
+    """One failed simulation, for ``--failures``: the geometry (SI) and its ratios to L (b/L
+    and h/span where the documented failure classes lie, docs/model-notes.md item 11)."""
+    L = kw["L"]
+    span = L - 2 * (kw["b"] + kw["w"])
+    return {"nodes": nodes, "status": status, "reason": reason, "seconds": round(seconds, 2),
+            "h_over_L": kw["h"] / L, "h_over_span": kw["h"] / span if span > 0 else None,
+            "t_over_L": kw["t"] / L, "w_over_L": kw["w"] / L, "b_over_L": kw["b"] / L,
+            "geometry": kw}
 
 
 def random_geometry(rng):
@@ -57,8 +71,9 @@ def random_geometry(rng):
             return kw
 
 
-def check_one(kw, time_limit, nodes):
-    """Simulate one geometry; returns (problems list, status prefix, seconds)."""
+def check_one(kw, time_limit, nodes, record=None):
+    """Simulate one geometry; returns (problems list, status prefix, seconds). ``record``:
+    called with a `failure_record` when the simulation fails (not an answer)."""
     from snapmorph.solver.stability import state_stability
     from snapmorph.units import UnitGeometry, simulate_unit
     from snapmorph.units.geometry import build_unit
@@ -70,10 +85,14 @@ def check_one(kw, time_limit, nodes):
         r = simulate_unit(g, nodes=nodes, time_limit=time_limit, critical=False,
                           check_self_standing=False)
     except Exception as exc:  # a valid geometry must never raise
+        if record:
+            record(failure_record(kw, nodes, "raised", f"{type(exc).__name__}: {exc}", 0.0))
         return [f"raised {type(exc).__name__}: {exc}"], "raised", time.perf_counter() - t0
     dt = time.perf_counter() - t0
     problems = []
     prefix = next((p for p in PREFIXES if r.status.startswith(p)), None)
+    if record and prefix not in ANSWERS:
+        record(failure_record(kw, nodes, prefix or r.status, r.status, dt))
     if prefix is None:
         problems.append(f"unknown status {r.status!r}")
     if dt > time_limit + MARGIN:
@@ -116,24 +135,24 @@ def check_one(kw, time_limit, nodes):
     return problems, prefix or r.status, dt
 
 
-#: the answered statuses whose change between two resolutions is a flag flip
-ANSWERS = ("ok", "monostable", "second state unstable")
-
-
-def run(n, seed=0, time_limit=5.0, nodes=41, log=None, compare=None, every=100):
+def run(n, seed=0, time_limit=5.0, nodes=41, log=None, compare=None, every=100,
+        failures=None):
     """Fuzz n geometries; returns (problems [(kw, list)], status counts, slowest seconds).
     ``compare``: a second resolution each geometry is also simulated at: an answer at both
     that differs (bistable at one, not at the other) is a flag flip, a problem; counts then
-    holds "<status at nodes> / <status at compare>" pairs too."""
+    holds "<status at nodes> / <status at compare>" pairs too. ``failures``: a list that
+    receives one record per failed simulation (timeout, not converged, raised): the
+    geometry, its ratios, the resolution, the status and its reason."""
     rng = np.random.default_rng(seed)
     bad, counts, slowest = [], {}, 0.0
+    record = None if failures is None else failures.append
     for i in range(n):
         kw = random_geometry(rng)
-        problems, prefix, dt = check_one(kw, time_limit, nodes)
+        problems, prefix, dt = check_one(kw, time_limit, nodes, record)
         counts[prefix] = counts.get(prefix, 0) + 1
         slowest = max(slowest, dt)
         if compare:
-            more, other, dt2 = check_one(kw, time_limit, compare)
+            more, other, dt2 = check_one(kw, time_limit, compare, record)
             slowest = max(slowest, dt2)
             problems += [f"at {compare} nodes: {m}" for m in more]
             pair = f"{prefix} / {other}"
@@ -156,11 +175,21 @@ def main(argv=None):
     p.add_argument("--compare", type=int, default=None,
                    help="a second resolution (e.g. --nodes 101 --compare 201): flag flips")
     p.add_argument("--every", type=int, default=100, help="progress line every N geometries")
+    p.add_argument("--failures", default=None,
+                   help="write every failed simulation (status, reason, geometry) to this "
+                        "JSON file")
     a = p.parse_args(argv)
     t0 = time.perf_counter()
+    failures = [] if a.failures else None
     bad, counts, slowest = run(a.n, a.seed, a.time_limit, a.nodes,
                                log=lambda m: print(m, flush=True), compare=a.compare,
-                               every=a.every)
+                               every=a.every, failures=failures)
+    if a.failures:
+        import json
+
+        with open(a.failures, "w") as fh:
+            json.dump(failures, fh, indent=1)
+        print(f"{len(failures)} failed simulations written to {a.failures}")
     print(f"{a.n} geometries in {time.perf_counter() - t0:.0f} s: {counts}; slowest "
           f"{slowest:.1f} s (limit {a.time_limit} s); {len(bad)} with problems")
     for kw, problems in bad[:20]:
