@@ -108,7 +108,8 @@ class _Mgdc:
         self.q = control.first_state(structure)
         self.lam = 0.0
         self.d = control.d_start
-        self.rec = Recorder(structure, fu, system)
+        # dq/dd at each state (`_rate`) where the state is positions alone (planar rods)
+        self.rec = Recorder(structure, fu, system, rates=not system.state_fields(self.q))
         system.evaluate(self.q)
         if not system.factor():
             raise ValueError(
@@ -117,8 +118,8 @@ class _Mgdc:
             )
         self.uP = system.solve(self.P)
         neg0 = system.negative_eigenvalues
-        self.rec.add(self.d, 0.0, self.q, system.energy, 0, neg0, neg0)
         flex = self.node_component(self.uP)
+        self.rec.add(self.d, 0.0, self.q, system.energy, 0, neg0, neg0, self._rate(flex))
         if not flex > 0:
             raise ValueError("the pushed node does not move along the direction under load")
         dd0 = control.span(flex, self.unit_N) / o["steps"]
@@ -148,6 +149,16 @@ class _Mgdc:
     def node_component(self, u):
         """The pushed node's component along the direction of a reduced vector ``u``."""
         return float(self._n_free @ u[self._r_idx])
+
+    def _rate(self, flex):
+        """dq/dd at the current state (a full state vector), from the tangent u_P = K^-1 P
+        whose pushed component is ``flex``: along the path u = lam' u_P, d' = lam' flex, so
+        dq/dd = W u_P / flex; None where d does not move with the load (a limit of d)."""
+        if not abs(flex) > 0.0:
+            return None
+        rate = np.zeros_like(self.q)
+        self.system.increment(rate, self.uP, 1.0 / flex)
+        return rate if np.all(np.isfinite(rate)) else None
 
     def run(self):
         """Step until the target displacement (or a stop); returns the `Path`."""
@@ -314,7 +325,8 @@ class _Mgdc:
             return False
         self._go_on_from(reroute)
         self.rec.add(self.d, self.lam * self.unit, self.q, reroute.state.energy, 0,
-                     reroute.state.neg_force, reroute.state.neg_disp)
+                     reroute.state.neg_force, reroute.state.neg_disp,
+                     self._rate(self.node_component(self.uP)))
         self.s, self.status = self.s0, "ok"
         return True
 
@@ -363,7 +375,9 @@ class _Mgdc:
                 s_new = reroute.state
                 neg, negd = s_new.neg_force, s_new.neg_disp
                 energy, iterations = s_new.energy, 0
-        rec.add(self.d, self.lam * unit, self.q, energy, iterations, neg, negd)
+                flex = self.node_component(self.uP)
+        rec.add(self.d, self.lam * unit, self.q, energy, iterations, neg, negd,
+                self._rate(flex))
         self.travelled += abs(self.d - rec.rows["d"][-2])
         distance = self.control.travel
         if self.travelled > WANDER * distance:

@@ -28,7 +28,11 @@ class Path:
     load_factor: (K,) the factor on every dead load (`solver.loading.follow_load` paths;
     None for a push, whose dead loads act at full value throughout);
     limit_load_factor: the load factor at the first limit point of the load factor (the
-    dead load at which the structure snaps), None when the path passed none.
+    dead load at which the structure snaps), None when the path passed none;
+    rates: (K, n_nodes, dim) m/m, dq/dd: how the positions change with the pushed node's
+    displacement at each state (NaN rows where it is not known, e.g. at a critical point),
+    or None when the driver gives none (displacement control; 3-D rods). The probes'
+    searches between states take their first guesses from them (`solver.states.between`).
     """
 
     displacement: np.ndarray
@@ -45,6 +49,7 @@ class Path:
     fields: dict = field(default_factory=dict)
     load_factor: np.ndarray | None = None
     limit_load_factor: float | None = None
+    rates: np.ndarray | None = None
 
     @property
     def twist(self) -> np.ndarray:
@@ -96,9 +101,11 @@ class Path:
 class Recorder:
     """Collects the converged states of a path (through the structure's interface only).
     Forces and energies come in the driver system's units and are kept in N and J
-    (``force_unit``: see `solver.problem.driver_system`)."""
+    (``force_unit``: see `solver.problem.driver_system`). ``rates``: keep each state's
+    dq/dd (the ``rate`` of `add`: a full state vector, None where unknown) as the path's
+    ``rates``."""
 
-    def __init__(self, structure, force_unit, system):
+    def __init__(self, structure, force_unit, system, rates=False):
         self.structure = structure
         self.force_unit = float(force_unit)
         # a system that carries reference frames (3-D rods) records the twists in the
@@ -106,13 +113,17 @@ class Recorder:
         self.system = system
         self.rows = {k: [] for k in ("d", "F", "q", "E", "it", "neg", "negd")}
         self.fields = {}
+        self.rates = [] if rates else None
 
-    def add(self, d, F, q, E, it, neg, negd):
+    def add(self, d, F, q, E, it, neg, negd, rate=None):
         st = self.structure
         F, E = F * self.force_unit, E * self.force_unit
         pos = np.array(st.positions_of(q), dtype=float, copy=True)
         for k, v in zip(self.rows, (d, F, pos, E, it, neg, negd)):
             self.rows[k].append(v)
+        if self.rates is not None:
+            self.rates.append(np.full(pos.shape, np.nan) if rate is None else
+                              np.array(st.positions_of(rate), dtype=float, copy=True))
         fields = dict(st.state_fields(q))
         fields.update(self.system.state_fields(q))
         for k, v in fields.items():
@@ -124,6 +135,8 @@ class Recorder:
             del v[rows:]
         for v in self.fields.values():
             del v[rows:]
+        if self.rates is not None:
+            del self.rates[rows:]
 
     def path(self, status, method, info, critical_points=()):
         r = self.rows
@@ -141,4 +154,6 @@ class Recorder:
             info=info,
             critical_points=list(critical_points),
             fields={k: np.array(v) for k, v in self.fields.items()},
+            rates=None if self.rates is None else
+            np.array(self.rates, dtype=float).reshape(-1, st.n_nodes, int(st.dim)),
         )

@@ -68,7 +68,7 @@ class DisplacementProbe:
         return self.structure.positions_of(q), c.force(self.system), self.system.negative_eigenvalues
 
 
-def refine_maximum(probe, d, F, positions, i, tol_d=None):
+def refine_maximum(probe, d, F, positions, i, tol_d=None, rates=None):
     """Maximum of F(d) near path sample ``i`` (a local maximum of F) on d in [d[i-1], d[i+1]]
     with displacement-controlled solves: the maxima of polynomials through the samples and
     the solves (`_interpolated_maximum`), Brent's bounded search (golden section with parabolic steps,
@@ -76,12 +76,12 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
     d_max is located. Returns (F_max, d_max), and leaves the full state at d_max in
     ``probe.last_state``.
 
-    Each solve starts from the path's own states, interpolated to the solve's d by the
-    parabola through the three samples (the state is a smooth function of d on the branch,
-    so the guess is off by O(spacing^3)), not from an earlier solve: with the node held,
-    the force maximum is close to a bifurcation of the held structure (an asymmetric mode;
-    docs/path-following.md), where K is nearly singular and a Newton started there takes a
-    wild first step."""
+    Each solve starts from the path's own states interpolated to the solve's d (`between`:
+    with the samples' ``rates`` dq/dd where the path gives them, else the parabola through
+    the three samples; the state is a smooth function of d on the branch), not from an
+    earlier solve: with the node held, the force maximum is close to a bifurcation of the
+    held structure (an asymmetric mode; docs/path-following.md), where K is nearly singular
+    and a Newton started there takes a wild first step."""
     a, b = float(d[i - 1]), float(d[i + 1])
     if not a < b:
         raise ConvergenceError("the path is not monotone in d around the maximum")
@@ -93,11 +93,13 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None):
     # force can be 50 % off), and the search is abandoned (the caller falls back)
     spread = float(np.max(np.abs(np.diff(Fs)))) + 1e-9 * float(np.max(np.abs(Fs)))
     samples = [np.asarray(positions[j], dtype=float) for j in range(i - 1, i + 2)]
+    slopes = None if rates is None else [np.asarray(rates[j], dtype=float)
+                                          for j in range(i - 1, i + 2)]
 
     def f(x):
         x = float(x)
         if x not in cache:
-            Fx = probe.solve(_on_parabola(ds, samples, x), x)[1]
+            Fx = probe.solve(between(ds, samples, slopes, x), x)[1]
             if not abs(Fx - float(np.interp(x, ds, Fs))) <= 2.0 * spread:
                 raise ConvergenceError(
                     f"the solve at d = {x:.6g} m left the path's branch (F = {Fx:.6g} N against "
@@ -204,6 +206,34 @@ def _polynomial_maximum(pts, lo, hi):
     if not maxima:
         return None
     return x0 + min(maxima, key=lambda r: abs(r - top)) * scale
+
+
+def between(ds, values, slopes, x):
+    """The state at displacement ``x`` between three path samples (``ds`` increasing,
+    ``values`` their states): `hermite` on the pair of samples that brackets x, with the
+    samples' ``slopes`` (dq/dd, `solver.path.Path.rates`); where they are None or not
+    finite (a critical point's row), the parabola through the three samples, off by
+    O(spacing^3). Newton solves started from it take one or two corrections instead of
+    three to eight after a snap."""
+    j = 0 if x <= float(ds[1]) else 1
+    if slopes is not None:
+        guess = hermite(ds[j], ds[j + 1], values[j], values[j + 1], slopes[j], slopes[j + 1], x)
+        if guess is not None:
+            return guess
+    return _on_parabola(ds, values, x)
+
+
+def hermite(d0, d1, q0, q1, r0, r1, x):
+    """The cubic Hermite interpolant at ``x`` of a state known at d0 and d1 (q0, q1) with
+    its slopes dq/dd there (r0, r1): off by O((d1 - d0)^4) on a smooth branch; None where a
+    slope is not finite (or d0 = d1)."""
+    h = float(d1) - float(d0)
+    if h == 0.0 or not (np.all(np.isfinite(r0)) and np.all(np.isfinite(r1))):
+        return None
+    t = (float(x) - float(d0)) / h
+    h00, h01 = (1.0 + 2.0 * t) * (1.0 - t) ** 2, t * t * (3.0 - 2.0 * t)
+    h10, h11 = t * (1.0 - t) ** 2 * h, t * t * (t - 1.0) * h
+    return h00 * q0 + h10 * r0 + h01 * q1 + h11 * r1
 
 
 def _on_parabola(ds, values, x):

@@ -92,19 +92,21 @@ class _Reading:
         self.probe.last_state = q
 
 
-def strain_on_path(probe, d, series, positions, k, X, rods, t, failures, tol=2e-3):
+def strain_on_path(probe, d, series, positions, k, X, rods, t, failures, tol=2e-3,
+                   rates=None):
     """The largest surface strain along a path whose sample ``k`` has the largest of the
     samples' ``series`` (`largest_strain`): between the samples, by displacement-controlled
     solves where the path is monotone in d around k (`push_through.refine_peak` on the
-    strain; ``tol`` its bracket as a fraction of the samples' spacing), else the vertex of
-    the parabola through the three samples. Never below the sample itself. The samples of a
+    strain; ``tol`` its bracket as a fraction of the samples' spacing; ``rates``: the
+    samples' dq/dd, the solves' guesses), else the vertex of the parabola through the three
+    samples. Never below the sample itself. The samples of a
     path stepped for its force metrics can stride over the strain's peak: read off them,
     the specimen-class units' strain came out up to 1.7 % low."""
     from snapmorph.units.push_through import refine_peak
 
     strained = None if probe is None else _Reading(
         probe, lambda pos, F: largest_strain(pos, X, rods, t)[0])
-    value = refine_peak(strained, d, series, positions, k, failures, tol)[0]
+    value = refine_peak(strained, d, series, positions, k, failures, tol, rates)[0]
     return max(float(series[k]), float(value))
 
 
@@ -123,11 +125,11 @@ def strain_place(rod, x, L) -> str:
 
 
 # ---------------------------------------------------------------------------- F_min
-def most_negative_force(probe, d, F, Q, i_pk, end, failures, tol=2e-3):
+def most_negative_force(probe, d, F, Q, i_pk, end, failures, tol=2e-3, rates=None):
     """(F_min N, d_Fmin m) of the snap path: the most negative F of the samples after the
     peak ``i_pk`` up to sample ``end`` (inclusive), refined by displacement-controlled
     solves where the path is monotone in d around it (`push_through.refine_peak` on -F,
-    ``tol`` its bracket as a fraction of the samples' spacing);
+    ``tol`` its bracket as a fraction of the samples' spacing, ``rates`` the samples' dq/dd);
     (NaN, NaN) when F does not fall below zero there."""
     from snapmorph.units.push_through import refine_peak
 
@@ -140,7 +142,7 @@ def most_negative_force(probe, d, F, Q, i_pk, end, failures, tol=2e-3):
     if 0 < m < len(F) - 1:
         neg_F = -np.asarray(F, float)
         F_max, d_max, _ = refine_peak(None if probe is None else _Reading(probe, lambda pos, F: -F), d, neg_F,
-                                      Q, m, failures, tol)
+                                      Q, m, failures, tol, rates)
         return -F_max, d_max
     return float(F[m]), float(d[m])
 
@@ -190,7 +192,7 @@ def snap_back(model, released, distance, steps=60, deadline_options=None, failur
         return NAN, NAN, stiffness, path
     probe = DisplacementProbe(st, model.apex, UP)
     F_back, d_back, _ = refine_peak(probe, d, F, np.asarray(path.positions), i,
-                                    (ConvergenceError, *failures))
+                                    (ConvergenceError, *failures), rates=path.rates)
     return F_back, d_back, stiffness, path
 
 

@@ -511,7 +511,8 @@ def _head(path, stop, start=0):
         negative_eigenvalues=path.negative_eigenvalues[rows],
         negative_eigenvalues_displacement=path.negative_eigenvalues_displacement[rows],
         critical_points=[c for c in path.critical_points if lo <= c.d <= hi],
-        fields={k: v[rows] for k, v in path.fields.items()})
+        fields={k: v[rows] for k, v in path.fields.items()},
+        rates=None if path.rates is None else path.rates[rows])
 
 
 def _joined(path, more, status):
@@ -525,6 +526,11 @@ def _joined(path, more, status):
     info["pushed_on"] = {"from_d": float(path.displacement[-1]), "method": more.method,
                          "status": more.status}
     fields = {k: cat(v, more.fields[k]) for k, v in path.fields.items() if k in more.fields}
+    rates = None
+    if path.rates is not None or more.rates is not None:  # NaN where one has none
+        unknown = np.full(np.shape(more.positions), np.nan)
+        rates = cat(np.full(np.shape(path.positions), np.nan) if path.rates is None
+                    else path.rates, unknown if more.rates is None else more.rates)
     return dataclasses.replace(
         path, displacement=cat(path.displacement, more.displacement),
         force=cat(path.force, more.force), positions=cat(path.positions, more.positions),
@@ -534,7 +540,7 @@ def _joined(path, more, status):
         negative_eigenvalues_displacement=cat(path.negative_eigenvalues_displacement,
                                               more.negative_eigenvalues_displacement),
         info=info, critical_points=list(path.critical_points) + list(more.critical_points),
-        fields=fields)
+        fields=fields, rates=rates)
 
 
 def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, deadline=None):
@@ -572,16 +578,17 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
     # the snap path: from d = 0 to the crossing of state (iii) (the whole path without one)
     end = len(out.curve[1]) - 1 if out.crossings[1] is None else out.crossings[1]
     result.F_min, result.d_Fmin = most_negative_force(
-        pusher.probe, *out.curve, path.positions, i_pk, end, _PlanarPush.failures, tol)
+        pusher.probe, *out.curve, path.positions, i_pk, end, _PlanarPush.failures, tol,
+        path.rates)
     rods = {"arch": arch, "base": base}
     X = st.reference_positions
     # the snap path's samples with the states (i), (ii), (iii) in their places along it
     # (exact equilibria between two samples), for the largest strain
-    d_path, states = _with_states(out, path, end)
+    d_path, states, rates = _with_states(out, path, end)
     top, rod, node, k, series = largest_strain(states, X, rods, g.t)
     # located between the samples by displacement-controlled solves
     result.strain_max = strain_on_path(pusher.probe, d_path, series, states, k, X, rods, g.t,
-                                       _PlanarPush.failures, tol)
+                                       _PlanarPush.failures, tol, rates)
     result.strain_where = strain_place(rod, X[rods[rod][node], 0], g.L)
     if "iii" not in out.states:  # no second state: monostable, or the path failed
         result.status, result.reason = out.status, out.reason
@@ -626,12 +633,15 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
 
 
 def _with_states(out, path, end):
-    """(d (K,), positions (K, n_nodes, 2)): the path's samples 0..``end`` with the states
-    (i), (ii) and (iii) of ``out`` (a `PushOutcome`) inserted where they lie: (i) next to
-    the peak sample on the side of d_cr, (ii) and (iii) inside the sample brackets of their
-    zero crossings. States not found are left out."""
+    """(d (K,), positions (K, n_nodes, 2), their dq/dd or None): the path's samples
+    0..``end`` with the states (i), (ii) and (iii) of ``out`` (a `PushOutcome`) inserted
+    where they lie: (i) next to the peak sample on the side of d_cr, (ii) and (iii) inside
+    the sample brackets of their zero crossings (rates NaN there: not known). States not
+    found are left out."""
     d = list(np.asarray(out.curve[0][:end + 1], float))
     P = list(np.asarray(path.positions[:end + 1], float))
+    R = None if path.rates is None else list(np.asarray(path.rates[:end + 1], float))
+    unknown = np.full(np.shape(P[0]), np.nan)
     places = []
     if "i" in out.states and out.peak is not None and np.isfinite(out.d_cr) \
             and out.d_cr != d[out.peak]:
@@ -648,10 +658,14 @@ def _with_states(out, path, end):
         near = at - 1 if abs(depth - lo) <= abs(depth - hi) else at
         if near < len(d) and abs(depth - d[near]) < 0.25 * abs(hi - lo):
             d[near], P[near] = float(depth), state
+            if R is not None:
+                R[near] = unknown
         else:
             d.insert(at, float(depth))
             P.insert(at, state)
-    return np.asarray(d), np.asarray(P)
+            if R is not None:
+                R.insert(at, unknown)
+    return np.asarray(d), np.asarray(P), None if R is None else np.asarray(R)
 
 
 def _snap_back(result, g, nodes, tie, tie_stiffness, released, steps, deadline):

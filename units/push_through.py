@@ -179,7 +179,7 @@ def parabola_peak(d, F, i):
     return float(F[i]), float(d[i])
 
 
-def refine_peak(probe, d, F, Q, i, failures, tol=2e-3):
+def refine_peak(probe, d, F, Q, i, failures, tol=2e-3, rates=None):
     """F_cr, d_cr and whether they were solved: the force maximum near path sample i by
     displacement-controlled solves (a limit point under load control is regular under
     displacement control); the vertex of the parabola through three samples when that
@@ -188,12 +188,14 @@ def refine_peak(probe, d, F, Q, i, failures, tol=2e-3):
     error e in d costs ~ F'' e^2 / 2 in F_cr). A search whose best solve stays below the
     sample itself (the sample lies at the maximum, closer than the search's tolerance)
     returns the sample: an equilibrium of the path, not the parabola's vertex (which between
-    coarse samples can overshoot the maximum by 1e-4 of F_cr)."""
+    coarse samples can overshoot the maximum by 1e-4 of F_cr). ``rates``: the samples'
+    dq/dd (`solver.path.Path.rates`, aligned with ``Q``), the solves' guesses, or None."""
     if probe is not None and 0 < i < len(d) - 1 and d[i - 1] < d[i] < d[i + 1]:
         from snapmorph.solver.states import refine_maximum
 
         try:
-            F_max, d_max = refine_maximum(probe, d, F, Q, i, tol_d=tol * (d[i + 1] - d[i - 1]))
+            F_max, d_max = refine_maximum(probe, d, F, Q, i, tol_d=tol * (d[i + 1] - d[i - 1]),
+                                          rates=rates)
         except failures:
             return (*parabola_peak(d, F, i), False)
         if F_max >= F[i]:
@@ -255,9 +257,11 @@ def refine_dips(probe, d, F, P, Q, i_pk, failures=(Exception,), tol=2e-3, neg=No
     return out if neg is None else (*out, np.asarray(neg))
 
 
-def zero_force_state(model, d, F, P, Q, i):
+def zero_force_state(model, d, F, P, Q, i, rates=None):
     """The equilibrium at F = 0 between samples i-1 and i (which bracket a zero of F):
-    Newton with the actuator unloaded from the interpolated state; if it fails or leaves the
+    Newton with the actuator unloaded from the interpolated state (between the samples'
+    states at the d where the chord of F crosses zero; with the samples' ``rates`` dq/dd,
+    `solver.path.Path.rates`, a cubic Hermite guess, else the states' chord); if it fails or leaves the
     bracket (it can wander to another equilibrium), the zero located first by regula falsi
     on the probe's displacement-controlled solves (`solver.states.zero_force_displacement`)
     and Newton from there. Returns (positions, state, error): error None when solved, else
@@ -267,6 +271,12 @@ def zero_force_state(model, d, F, P, Q, i):
 
     s = F[i - 1] / (F[i - 1] - F[i])
     guess = (1 - s) * Q[i - 1] + s * Q[i]
+    if rates is not None and d[i] > d[i - 1]:
+        from snapmorph.solver.states import hermite
+
+        smooth = hermite(d[i - 1], d[i], Q[i - 1], Q[i], rates[i - 1], rates[i],
+                         (1 - s) * d[i - 1] + s * d[i])
+        guess = guess if smooth is None else smooth
     lo, hi = min(d[i - 1], d[i]), max(d[i - 1], d[i])
     pad = 1e-6 * (hi - lo) + 1e-12
 
@@ -392,6 +402,9 @@ def push_through(model, rules: Rules = Rules()) -> PushOutcome:
     d, F = np.asarray(path.displacement), np.asarray(path.force)
     out = PushOutcome("ok", path_status=str(path.status), curve=(d.copy(), F.copy()), path=path)
     P, Q = np.asarray(path.positions), model.states(path)
+    # the samples' dq/dd, the searches' guesses (planar paths, whose states are positions)
+    rates = path.rates if getattr(path, "rates", None) is not None and Q is path.positions \
+        else None
     probe = model.probe
     counts = getattr(model, "force_counts", None)
     neg = None if counts is None else counts(path)
@@ -401,6 +414,7 @@ def push_through(model, rules: Rules = Rules()) -> PushOutcome:
         if len(refined[0]) > len(d):
             d, F, P, Q = refined[:4]
             neg = None if neg is None else refined[4]
+            rates = None  # (no rates at the inserted samples)
             out.curve = (d.copy(), F.copy())
             _, j, k = snap_crossings(d, F, neg)
     out.crossings = (j, k)
@@ -408,7 +422,7 @@ def push_through(model, rules: Rules = Rules()) -> PushOutcome:
     if i_pk is not None:
         if rules.refine_peak:
             out.F_cr, out.d_cr, exact = refine_peak(probe, d, F, Q, i_pk, model.failures,
-                                                    rules.peak_tol)
+                                                    rules.peak_tol, rates)
         else:
             (out.F_cr, out.d_cr), exact = parabola_peak(d, F, i_pk), False
         out.states["i"], out.full_states["i"] = np.asarray(P[i_pk]).copy(), Q[i_pk].copy()
@@ -424,12 +438,12 @@ def push_through(model, rules: Rules = Rules()) -> PushOutcome:
 
     pos_ii = q_ii = err_ii = None
     if rules.unstable_state:
-        pos_ii, q_ii, err_ii = zero_force_state(model, d, F, P, Q, j)
+        pos_ii, q_ii, err_ii = zero_force_state(model, d, F, P, Q, j, rates)
         if err_ii is not None and "ii" in rules.exact:
             out.error = err_ii
             out.status = out.reason = _not_found("the unstable state (ii)", model, pos_ii)
             return out
-    pos_iii, q_iii, err_iii = zero_force_state(model, d, F, P, Q, k)
+    pos_iii, q_iii, err_iii = zero_force_state(model, d, F, P, Q, k, rates)
     out.exact_states = err_ii is None and err_iii is None
     if pos_ii is not None:
         out.d_unstable = model.displacement(pos_ii)

@@ -77,3 +77,56 @@ def test_refine_maximum_finds_a_sharp_peak_that_far_samples_misplace():
     F_max, d_max, calls, tol = _peak_search(F, np.array([0.2, 0.45, 0.6]))
     assert abs(d_max - 0.47) <= 10 * tol
     assert F_max == pytest.approx(1.0, abs=1e-9)
+
+
+def test_hermite_guess_is_fourth_order_and_falls_back_on_unknown_slopes():
+    """The cubic Hermite guess between two samples of a smooth q(d) is off by O(h^4) (the
+    parabola through three samples by O(h^3)); a NaN slope (a critical point's row) falls
+    back on the parabola."""
+    from snapmorph.solver.states import _on_parabola, between
+
+    q = lambda x: np.array([np.sin(3 * x), np.exp(x)])  # noqa: E731
+    dq = lambda x: np.array([3 * np.cos(3 * x), np.exp(x)])  # noqa: E731
+    errors = []
+    for h in (0.2, 0.1, 0.05):
+        ds = np.array([0.3, 0.3 + h, 0.3 + 2 * h])
+        x = 0.3 + 0.6 * h
+        guess = between(ds, [q(v) for v in ds], [dq(v) for v in ds], x)
+        errors.append(np.max(np.abs(guess - q(x))))
+        nan = [dq(ds[0]), np.full(2, np.nan), dq(ds[2])]
+        assert np.array_equal(between(ds, [q(v) for v in ds], nan, x),
+                              _on_parabola(ds, [q(v) for v in ds], x))
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(orders > 3.6), orders
+
+
+def test_mgdc_path_rates_are_the_derivative_of_the_positions_along_d():
+    """`Path.rates` (dq/dd from the tangent K^-1 P) against central differences of two
+    displacement-controlled solves at d +- delta, on a clamped arch's snap path: before and
+    after the force peak and past the snap (where F < 0)."""
+    from snapmorph.solver import Structure
+    from snapmorph.solver.states import DisplacementProbe
+
+    x = np.linspace(0.0, 0.1, 41)
+    st = Structure()
+    rod = st.add_rod(np.stack([x, 0.01 * np.sin(np.pi * x / 0.1)], 1), 5e-3, 0.5e-3, 2.2e9)
+    for node in (0, 1, 39, 40):
+        st.fix(int(rod.nodes[node]), "xz")
+    apex = int(rod.nodes[20])
+    st.fix(apex, "x")
+    path = st.push(apex, (0.0, -1.0), 0.015, steps=40)
+    assert path.rates is not None and path.rates.shape == path.positions.shape
+    probe = DisplacementProbe(st, apex)
+    delta = 1e-6
+    k_peak = int(np.argmax(path.force))
+    checked = 0
+    for k in (k_peak // 2, k_peak + 3, int(np.argmin(path.force))):
+        if not np.all(np.isfinite(path.rates[k])):
+            continue
+        d = path.displacement[k]
+        plus = probe.solve(path.positions[k], d + delta)[0].copy()
+        minus = probe.solve(path.positions[k], d - delta)[0].copy()
+        fd = (plus - minus) / (2 * delta)
+        assert np.max(np.abs(path.rates[k] - fd)) <= 1e-5 * np.max(np.abs(fd))
+        checked += 1
+    assert checked == 3
