@@ -35,36 +35,51 @@ def envelope_heights(n, *element_dofs):
     element with i, so column j reaches down to max{i : f_i <= j}. The factor and the solves
     then neither scan for it nor touch the zeros below it."""
     first = np.arange(n, dtype=np.int64)
-    rows, starts = [first], [first]
     for dofs in element_dofs:
         d = np.asarray(dofs, dtype=np.int64)
-        if d.size == 0:
-            continue
-        lo = np.min(np.where(d >= 0, d, np.iinfo(np.int64).max), axis=1)
-        ok = d >= 0
-        rows.append(d[ok])
-        starts.append(np.broadcast_to(lo[:, None], d.shape)[ok])
-    # the smallest start of every row: sort (row, start) pairs, keep each row's first
-    # (what np.minimum.at does, without its per-element cost)
-    r, f = np.concatenate(rows), np.concatenate(starts)
-    order = np.lexsort((f, r))
-    r, f = r[order], f[order]
-    head = np.ones(len(r), dtype=bool)
-    head[1:] = r[1:] != r[:-1]
-    first = np.empty(n, dtype=np.int64)
-    first[r[head]] = f[head]
+        if d.size:
+            _row_starts(np.ascontiguousarray(d), first)
     return profile_heights(first)
+
+
+@njit(cache=True)
+def _row_starts(dofs, first):
+    """Lower ``first[i]`` to the smallest DOF of every element (row of ``dofs``, -1 held)
+    that holds DOF i (a compiled loop: computed for every new DOF ordering, several per
+    unit, where the vectorised sort it replaces cost 0.1 ms)."""
+    for e in range(dofs.shape[0]):
+        lo = -1
+        for a in range(dofs.shape[1]):
+            r = dofs[e, a]
+            if r >= 0 and (lo < 0 or r < lo):
+                lo = r
+        for a in range(dofs.shape[1]):
+            r = dofs[e, a]
+            if r >= 0 and lo < first[r]:
+                first[r] = lo
 
 
 def profile_heights(first):
     """(n,) int64: the extent below the diagonal of every column of the factor of a matrix
     whose row i starts at column ``first[i]`` (<= i): column j reaches down to the last row
     i with first[i] <= j (fill stays inside this envelope)."""
-    first = np.asarray(first, dtype=np.int64)
-    rows = np.arange(first.shape[0], dtype=np.int64)
-    last = rows.copy()
-    np.maximum.at(last, first, rows)
-    return np.maximum.accumulate(last) - rows
+    return _profile(np.ascontiguousarray(first, dtype=np.int64))
+
+
+@njit(cache=True)
+def _profile(first):
+    n = first.shape[0]
+    last = np.arange(n)
+    for i in range(n):  # the last row that starts at each column
+        if i > last[first[i]]:
+            last[first[i]] = i
+    heights = np.empty(n, dtype=np.int64)
+    reach = -1
+    for j in range(n):  # ... or at any column before it
+        if last[j] > reach:
+            reach = last[j]
+        heights[j] = reach - j
+    return heights
 
 
 @njit(cache=True)

@@ -132,7 +132,7 @@ class ConstrainedStructure:
                 or len(set(components)) != len(components)):
             raise ValueError(f"components must be {self.component_choices}; got {components!r}")
         self._fixed.setdefault(node, set()).update(names.index(c) for c in components)
-        self._cache = None
+        self._constraints_changed()
 
     def tie(self, node_a, node_b, method="exact", stiffness=None):
         """Bond two nodes: ``method="exact"``: equal displacements (see the subclass for
@@ -144,9 +144,10 @@ class ConstrainedStructure:
             raise ValueError(f"cannot tie node {a} to itself")
         if method == "exact":
             self._merges.append((a, b))
+            self._constraints_changed()
         else:
             self._tie_other(a, b, method, stiffness)
-        self._cache = None
+            self._cache = None
 
     def _tie_other(self, a, b, method, stiffness):
         raise ValueError(f"tie method must be 'exact'; got {method!r}")
@@ -161,7 +162,30 @@ class ConstrainedStructure:
         self._rigid_groups.append(nodes)
         for a, b in zip(nodes[:-1], nodes[1:]):
             self._merges.append((a, b))
+        self._constraints_changed()
+
+    def _constraints_changed(self):
+        """A support, exact tie or rigid group was added: drop what depends on them (here
+        the model arrays; a structure whose elements do not depend on them keeps its
+        elements, its DOF orderings being keyed on the constraints)."""
         self._cache = None
+
+    def copy(self):
+        """A copy with its own supports, ties, rigid groups, dead loads and rods list, that
+        shares the rods' arrays and the built model arrays (read-only) with this one: the
+        variants of one mesh (a unit with and without its actuator and rig) cost no second
+        meshing. Adding rods, clamps or springs to either leaves the other as it was."""
+        other = copy.copy(self)
+        for name, value in vars(self).items():
+            if isinstance(value, dict):
+                value = {k: (set(v) if isinstance(v, set) else v) for k, v in value.items()}
+            elif isinstance(value, (list, set)):
+                value = type(value)(list(v) if isinstance(v, list) else v for v in value)
+            else:
+                continue
+            setattr(other, name, value)
+        other._supernodes_memo = None
+        return other
 
     # ------------------------------------------------------------------ dead loads
     def add_load(self, node, force):
@@ -348,11 +372,16 @@ class ConstrainedStructure:
         and EI_max / length^2; tolerances and step sizes are taken relative to these."""
         if not self.rods:
             raise ValueError("the structure has no rods")
-        X = self.reference_positions
-        length = float(np.max(np.ptp(X, axis=0)))
-        if not length > 0.0:
-            length = float(max(np.max(np.abs(X)), 1e-300))
-        return length, self._max_bending_stiffness() / length**2
+        # asked by every driver, probe and control: computed again only when a rod was added
+        memo = getattr(self, "_scales_memo", None)
+        if memo is None or memo[0] != len(self.rods):
+            X = self.reference_positions
+            length = float(np.max(np.ptp(X, axis=0)))
+            if not length > 0.0:
+                length = float(max(np.max(np.abs(X)), 1e-300))
+            memo = self._scales_memo = (len(self.rods),
+                                        (length, self._max_bending_stiffness() / length**2))
+        return memo[1]
 
     def _max_bending_stiffness(self) -> float:
         """The largest bending stiffness of the rods, N m^2 (the force scale's)."""

@@ -399,6 +399,11 @@ class Structure(ConstrainedStructure):
                 best = max(best, float(np.max(sp[mask, 0] / sp[mask, 1])))
         return best
 
+    def _constraints_changed(self):
+        """Supports, exact ties and rigid groups do not change the elements (the DOF
+        orderings built from them are keyed on the constraints, `_ordering`): a copy that
+        only adds constraints keeps sharing its original's elements and orderings."""
+
     # ------------------------------------------------------------------ model arrays
     def elements(self, normalized=False):
         """The element tuple consumed by `solver.assembly` (see its docstring).
@@ -408,6 +413,8 @@ class Structure(ConstrainedStructure):
         bit of a path (forces and energies scale back by E_max / E_REF)."""
         if self._cache is None:
             self._cache = (self._build_elements(False), self._build_elements(True))
+            # the orderings of these elements (`_ordering`), shared by later copies
+            self._orderings = (self._cache, {})
         return self._cache[1 if normalized else 0]
 
     @property
@@ -496,13 +503,15 @@ class Structure(ConstrainedStructure):
 
     def _ordering(self, extra_fixed, elements):
         """((dof_map, n_reduced, bandwidth), layout) of `reduced_system`, built once per set
-        of held components: a unit's pushes, probes and state checks reuse it (the key holds
-        the supports, the extra held components and the element tables it was built from).
-        ``layout``: [element DOFs, envelope heights] of the systems built from it, filled by
-        the first (a list: [None, None] until then)."""
+        of held components and shared displacements: a unit's pushes, probes and state
+        checks, and the copies of a structure (`copy`) that share its elements, reuse it
+        (the key holds the supports, the extra held components, the exact ties and rigid
+        groups, and the element tables it was built from). ``layout``: [element DOFs,
+        envelope heights] of the systems built from it, filled by the first (a list: [None,
+        None] until then)."""
         key = (tuple(sorted((int(n), tuple(sorted(c))) for n, c in self._fixed.items())),
                tuple((int(n), int(c)) for n, c in (extra_fixed or ())),
-               len(self._merges), len(self._rigid_groups))
+               tuple(self._merges))
         memo = getattr(self, "_orderings", None)
         if memo is None or memo[0] is not self._cache:  # built from other elements
             memo = self._orderings = (self._cache, {})

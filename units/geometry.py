@@ -240,7 +240,9 @@ def check_nodes(nodes) -> int:
 
 @dataclass
 class UnitModel:
-    """A meshed unit: the structure and the nodes the experiment needs."""
+    """A meshed unit: the structure and the nodes the experiment needs. ``joint``: the arch
+    nodes the actuator holds rigid; ``bare``: the mesh with its bonds only (no rig, no
+    actuator), which `variant` copies."""
 
     structure: Structure
     arch_nodes: np.ndarray
@@ -248,6 +250,15 @@ class UnitModel:
     apex: int
     supports: tuple[int, int]
     base_mid: int
+    joint: tuple = ()
+    bare: Structure | None = None
+
+    def variant(self, actuator=True, supports=True) -> "UnitModel":
+        """The same mesh with (or without) the actuator and the rig's rollers, as
+        `build_unit` makes it: a copy of ``bare`` sharing its elements and DOF orderings
+        (a unit's push, self-standing check and snap-back mesh it once)."""
+        return _rigged(self.bare, self.arch_nodes, self.base_nodes, self.apex, self.supports,
+                       self.base_mid, self.joint, actuator, supports)
 
 
 @functools.lru_cache(maxsize=32)
@@ -389,10 +400,21 @@ def build_unit(
     s0 = int(base.nodes[int(np.argmin(np.abs(base_x - sup)))])
     s1 = int(base.nodes[int(np.argmin(np.abs(base_x - (L - sup))))])
     base_mid = int(base.nodes[int(np.argmin(np.abs(base_x - 0.5 * L)))])
+    st.elements()  # built once, shared by the variants (`UnitModel.variant`)
+    return _rigged(st, arch.nodes.copy(), base.nodes.copy(), apex, (s0, s1), base_mid,
+                   tuple(joint), actuator, supports)
+
+
+def _rigged(bare, arch_nodes, base_nodes, apex, rollers, base_mid, joint, actuator,
+            supports) -> UnitModel:
+    """The unit on a copy of the mesh ``bare``: the rig's rollers (z held at ``rollers``)
+    when ``supports``, the actuator (the ``joint`` nodes rigid, the apex held in x) when
+    ``actuator``."""
+    st = bare.copy()
     if supports:
-        st.fix(s0, "z")
-        st.fix(s1, "z")
+        st.fix(rollers[0], "z")
+        st.fix(rollers[1], "z")
     if actuator:
-        st.rigid(joint)
+        st.rigid(list(joint))
         st.fix(apex, "x")
-    return UnitModel(st, arch.nodes.copy(), base.nodes.copy(), apex, (s0, s1), base_mid)
+    return UnitModel(st, arch_nodes, base_nodes, apex, tuple(rollers), base_mid, joint, bare)

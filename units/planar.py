@@ -226,7 +226,7 @@ def simulate_unit(
     model = build_unit(gi, nodes=nodes, tie=tie, tie_stiffness=k_int)
     try:
         push = dict(method=method, steps=steps, branch=branch, critical=critical)
-        result = _simulate(gi, model, push, check_self_standing, nodes, tie, k_int, deadline)
+        result = _simulate(gi, model, push, check_self_standing, deadline)
     except _Timeout as exc:
         result = UnitResult(gi, f"timeout: {exc}", reason=f"timeout: {exc}")
     except ConvergenceError as exc:
@@ -543,7 +543,7 @@ def _joined(path, more, status):
         fields=fields, rates=rates)
 
 
-def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, deadline=None):
+def _simulate(g, model, push, check_self_standing, deadline=None):
     st = model.structure
     critical = push["critical"]
     pusher = _PlanarPush(model, push, 3.0 * g.h, deadline, push_limit(g))
@@ -614,8 +614,7 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
     result.energy_stored = st.energy(pos_iii)
     if check_self_standing:
         _check_deadline(deadline, "before the released state")
-        result.self_standing, released = _self_standing(g, model, pos_iii, nodes, tie,
-                                                         tie_stiffness)
+        result.self_standing, released = _self_standing(g, model, pos_iii)
         if released is not None:
             rb = released[base]
             result.released = {
@@ -627,8 +626,7 @@ def _simulate(g, model, push, check_self_standing, nodes, tie, tie_stiffness, de
             }
             result.strain_max_released = largest_strain(released, X, rods, g.t)[0]
             _check_deadline(deadline, "before the snap-back push")
-            _snap_back(result, g, nodes, tie, tie_stiffness, released, push["steps"],
-                       deadline)
+            _snap_back(result, g, model, released, push["steps"], deadline)
     return result
 
 
@@ -668,10 +666,10 @@ def _with_states(out, path, end):
     return np.asarray(d), np.asarray(P), None if R is None else np.asarray(R)
 
 
-def _snap_back(result, g, nodes, tie, tie_stiffness, released, steps, deadline):
+def _snap_back(result, g, model, released, steps, deadline):
     """F_back and stiffness_released of a bistable, self-standing result (`units.metrics.
     snap_back`): the unit without its actuator on the rollers, its base middle held in x."""
-    back = build_unit(g, nodes=nodes, tie=tie, tie_stiffness=tie_stiffness, actuator=False)
+    back = model.variant(actuator=False)
     back.structure.fix(back.base_mid, "x")
     options = {} if deadline is None else {"time_limit": max(deadline - time.perf_counter(),
                                                              1e-3)}
@@ -696,12 +694,11 @@ def _state_stability(st, model, positions, system):
         return None
 
 
-def _self_standing(g, model, pos_iii, nodes, tie, tie_stiffness):
+def _self_standing(g, model, pos_iii):
     """Is state (iii) stable with the actuator and rollers removed (rigid-body motion held
     by a statically determinate set of constraints)? Returns (flag, released positions or
     None)."""
-    free = build_unit(g, nodes=nodes, tie=tie, tie_stiffness=tie_stiffness,
-                      actuator=False, supports=False)
+    free = model.variant(actuator=False, supports=False)
     st = free.structure
     st.fix(free.base_mid, "xz")
     st.fix(int(free.base_nodes[0]), "z")

@@ -118,3 +118,47 @@ def test_cached_layout_follows_the_structure():
     assert rep[4] == rep[7] and len(rep) == 8
     c = st.reduced_system()
     assert c.n == 2 * 8 - 2 - 2 and c.dofs[0] is not a.dofs[0]
+
+
+def test_structure_copies_share_elements_not_constraints():
+    """`Structure.copy`: the variants of one mesh share its element arrays and orderings
+    (keyed on the constraints: a copy with other supports or ties gets its own DOF map),
+    while supports, ties, rigid groups and rods added to one leave the other as it was;
+    each copy's systems are the ones a fresh structure with the same constraints builds."""
+    from snapmorph.solver import Structure
+
+    def rods():
+        st = Structure()
+        x = np.linspace(0.0, 0.1, 21)
+        a = st.add_rod(np.stack([x, 0.01 * np.sin(np.pi * x / 0.1)], 1), 5e-3, 5e-4, 2.2e9)
+        b = st.add_rod(np.stack([x, np.zeros_like(x)], 1), 1e-2, 5e-4, 2.2e9)
+        for k in (0, 1, 19, 20):
+            st.tie(int(a.nodes[k]), int(b.nodes[k]))
+        return st, a, b
+
+    bare, a, b = rods()
+    bare.elements()
+    rigged = bare.copy()
+    rigged.fix(int(b.nodes[1]), "z")
+    rigged.fix(int(b.nodes[19]), "z")
+    rigged.rigid([int(n) for n in a.nodes[9:12]])
+    rigged.fix(int(a.nodes[10]), "x")
+    free = bare.copy()
+    free.fix(int(b.nodes[10]), "xz")
+    free.fix(int(b.nodes[0]), "z")
+    assert bare._fixed == {} and len(bare._merges) == 4 and bare._rigid_groups == []
+    assert rigged.elements() is bare.elements() and free.elements() is bare.elements()
+    for copy_, steps in ((rigged, (("fix", (int(b.nodes[1]), "z")), ("fix", (int(b.nodes[19]), "z")),
+                                   ("rigid", ([int(n) for n in a.nodes[9:12]],)),
+                                   ("fix", (int(a.nodes[10]), "x")))),
+                         (free, (("fix", (int(b.nodes[10]), "xz")), ("fix", (int(b.nodes[0]), "z"))))):
+        fresh, _, _ = rods()
+        for name, args in steps:
+            getattr(fresh, name)(*args)
+        for extra in (None, [(int(a.nodes[10]), 1)]):
+            got, want = copy_.reduced_system(extra), fresh.reduced_system(extra)
+            assert np.array_equal(got.dof_map, want.dof_map) and got.n == want.n
+    assert rigged.reduced_system().n != free.reduced_system().n
+    more = free.copy()
+    more.add_rod(np.array([[0.0, 0.02], [0.05, 0.03], [0.1, 0.02]]), 5e-3, 5e-4, 2.2e9)
+    assert free.n_nodes == 42 and more.n_nodes == 45 and len(free.rods) == 2
