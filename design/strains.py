@@ -15,33 +15,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from snapmorph.units.metrics import surface_strain
+
 __all__ = ["rod_surface_strain", "unit_strains", "largest_strain", "path_strain"]
-
-
-def _turning(e):
-    """Integrated curvature 2 tan(phi / 2) at the interior nodes of edges e (m, 2)."""
-    a, b = e[:-1], e[1:]
-    phi = np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], np.sum(a * b, axis=1))
-    return 2.0 * np.tan(0.5 * phi)
 
 
 def rod_surface_strain(x, X, thickness) -> np.ndarray:
     """(N,) surface strain of one rod at its N nodes: positions ``x`` (N, 2) m, stress-free
     positions ``X`` (N, 2) m, ``thickness`` (N-1, 2) m of each edge's two halves (or a
-    scalar). Module doc for the formula."""
-    x, X = np.asarray(x, float), np.asarray(X, float)
-    e, e_bar = np.diff(x, axis=0), np.diff(X, axis=0)
-    rest = np.hypot(*e_bar.T)
-    stretch = np.hypot(*e.T) / rest - 1.0
-    t = np.broadcast_to(np.asarray(thickness, float), (len(e), 2))
-    out = np.empty(len(x))
-    out[0], out[-1] = abs(stretch[0]), abs(stretch[-1])
-    if len(x) > 2:
-        voronoi = 0.5 * (rest[:-1] + rest[1:])
-        dkappa = (_turning(e) - _turning(e_bar)) / voronoi
-        t_node = 0.5 * (t[:-1, 1] + t[1:, 0])
-        out[1:-1] = np.abs(0.5 * (stretch[:-1] + stretch[1:])) + np.abs(dkappa) * 0.5 * t_node
-    return out
+    scalar). Module doc for the formula; the units' own (`units.metrics.surface_strain`)."""
+    return surface_strain(np.asarray(x, float), np.asarray(X, float), thickness)
 
 
 def _node_strains(model, P, rods=None):

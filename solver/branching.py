@@ -201,8 +201,13 @@ class BranchMonitor:
         rising = (states[-2].dir_force if control == "force" else states[-2].dir_disp) > 0
         k = int(np.argmax(y) if rising else np.argmin(y))
         xv, yv = x[k], y[k]
-        if len(x) == 3 and (np.all(np.diff(x) > 0) or np.all(np.diff(x) < 0)):
-            a, b, c = np.polyfit(x - x[1], y, 2)
+        if len(x) == 3 and (x[0] < x[1] < x[2] or x[0] > x[1] > x[2]):
+            # the parabola a u^2 + b u + c through the three (u = x - x[1]) in closed form
+            # (np.polyfit's least squares cost 0.15 ms a limit point)
+            u0, u2 = x[0] - x[1], x[2] - x[1]
+            s0, s2 = (y[0] - y[1]) / u0, (y[2] - y[1]) / u2
+            a = (s2 - s0) / (u2 - u0)
+            b, c = s0 - a * u0, y[1]
             xr = x[1] - b / (2 * a) if a != 0.0 else np.inf
             if x.min() <= xr <= x.max():
                 xv, yv = xr, c - b * b / (4 * a)

@@ -231,3 +231,68 @@ def dead_load_terms(x, force, x_ref):
     stress-free state, so that the potential stays of the size of the work done and the
     energies the drivers compare keep their digits."""
     return -force * (x - x_ref), -force
+
+
+# ---------------------------------------------------------------------------- gradients only
+# The energy and gradient of each term without its Hessian: what a state that Newton has
+# converged to needs (its force and energy), the stiffness being factorised already at the
+# iterate before it (`solver.assembly.assemble_gradient`).
+
+@njit(cache=True)
+def stretch_gradient(x, EA, rest_length, grad):
+    """`stretch_terms` without the Hessian: writes d(E)/dx (4,), returns E (J)."""
+    ex = x[2] - x[0]
+    ez = x[3] - x[1]
+    length = np.sqrt(ex * ex + ez * ez)
+    k = EA / rest_length
+    stretch = length - rest_length
+    gx = k * stretch * (ex / length)
+    gz = k * stretch * (ez / length)
+    grad[0] = -gx
+    grad[1] = -gz
+    grad[2] = gx
+    grad[3] = gz
+    return 0.5 * k * stretch * stretch
+
+
+@njit(cache=True)
+def bending_gradient(x, stiffness, kappa_bar, grad):
+    """`bending_terms` without the Hessian: writes d(E)/dx (6,), returns E (J). The
+    curvature kappa = 2 f / g and its derivatives with respect to the edge vectors as in
+    `curvature_terms`."""
+    a0 = x[2] - x[0]
+    b0 = x[3] - x[1]
+    a1 = x[4] - x[2]
+    b1 = x[5] - x[3]
+    n0 = np.sqrt(a0 * a0 + b0 * b0)
+    n1 = np.sqrt(a1 * a1 + b1 * b1)
+    f = a0 * b1 - b0 * a1
+    inv_g = 1.0 / (n0 * n1 + a0 * a1 + b0 * b1)
+    kappa = 2.0 * f * inv_g
+    c = stiffness * (kappa - kappa_bar)
+    # d(kappa)/d(a0, b0, a1, b1) = 2 (f_e - f g_e / g) / g
+    s = 2.0 * c * inv_g
+    fg = f * inv_g
+    k0 = s * (b1 - fg * (n1 * a0 / n0 + a1))
+    k1 = s * (-a1 - fg * (n1 * b0 / n0 + b1))
+    k2 = s * (-b0 - fg * (n0 * a1 / n1 + a0))
+    k3 = s * (a0 - fg * (n0 * b1 / n1 + b0))
+    grad[0] = -k0
+    grad[1] = -k1
+    grad[2] = k0 - k2
+    grad[3] = k1 - k3
+    grad[4] = k2
+    grad[5] = k3
+    return 0.5 * c * (kappa - kappa_bar)
+
+
+@njit(cache=True)
+def spring_gradient(x, stiffness, rest_offset_x, rest_offset_z, grad):
+    """`spring_terms` without the Hessian: writes d(E)/dx (4,), returns E (J)."""
+    dx = x[0] - x[2] - rest_offset_x
+    dz = x[1] - x[3] - rest_offset_z
+    grad[0] = stiffness * dx
+    grad[1] = stiffness * dz
+    grad[2] = -stiffness * dx
+    grad[3] = -stiffness * dz
+    return 0.5 * stiffness * (dx * dx + dz * dz)

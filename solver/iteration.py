@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from snapmorph.solver.assembly import assemble_dead_loads, assemble_system
+from snapmorph.solver.assembly import assemble_dead_loads, assemble_gradient, assemble_system
 from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws
 from snapmorph.solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
 
@@ -208,3 +208,15 @@ def mgdc_iteration3d(q, lam, P, uP1, model, loads, dof_map, dof_scale, band, hei
         return status, neg, r_max, 0.0, 0.0, energy
     du_max = _apply_scaled(q, dof_map, dof_scale, work[:, 0])
     return 2, neg, r_max, du_max, dl, energy
+
+
+@njit(cache=True)
+def settle_state(q, lam, P, elements, dofs, loads, grad, grad_full, work):
+    """The energy (J) and gradients (N) at a state ``q`` Newton has converged to on the
+    displacements, without the stiffness (`solver.assembly.assemble_gradient`): K stays
+    factorised at the iterate before. ``work`` (n, 3) scratch.
+
+    Returns (residual_max, energy)."""
+    energy = with_dead_loads(q, loads, grad, grad_full,
+                             assemble_gradient(q, elements, dofs, grad, grad_full))
+    return _residual(grad, lam, P, work[:, 0]), energy

@@ -154,11 +154,11 @@ class _Mgdc:
         """dq/dd at the current state (a full state vector), from the tangent u_P = K^-1 P
         whose pushed component is ``flex``: along the path u = lam' u_P, d' = lam' flex, so
         dq/dd = W u_P / flex; None where d does not move with the load (a limit of d)."""
-        if not abs(flex) > 0.0:
+        if not (abs(flex) > 0.0 and np.isfinite(flex)):  # (u_P itself is a finite solve)
             return None
         rate = np.zeros_like(self.q)
         self.system.increment(rate, self.uP, 1.0 / flex)
-        return rate if np.all(np.isfinite(rate)) else None
+        return rate
 
     def run(self):
         """Step until the target displacement (or a stop); returns the `Path`."""

@@ -25,11 +25,15 @@ TOL_DISP = 1e-11
 SETTLE_FACTOR = 1e3
 
 
-def newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move, fused=True):
+def newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move, fused=True,
+           settle=False):
     """Newton at the fixed load ``lam P`` (P None: no load); ``q`` is updated in place.
 
     Returns the iterations used, or -1 when it failed. On success the system holds the
-    assembled and factorised state at the converged q.
+    assembled and factorised state at the converged q; with ``settle``, once the
+    corrections are below ``tol_disp``, its energy and gradients at q with K factorised at
+    the iterate before, within ``tol_disp`` of it (`System.settle`: no last assembly and
+    factorisation; for a caller that reads the state's force, not its inertia).
 
     ``fused``: iterate with the system's compiled one-call iteration (`System.fused_newton`)
     while it can, the general path (assemble, factorise, solve apart; a dense pivoting
@@ -43,6 +47,8 @@ def newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move, fused=Tru
         P = np.zeros(system.n)
     for it in range(max_iter + 1):
         if fused and it < max_iter:
+            if settle and du_max <= tol_disp and system.settle(q, lam, P) is not None:
+                return it  # converged on the displacements: K stays factorised one step back
             fstat, r_max, du_step = system.fused_newton(
                 q, lam, P, tol_force if du_max > tol_disp else np.inf)
             if fstat == 0:

@@ -114,6 +114,9 @@ class Recorder:
         self.rows = {k: [] for k in ("d", "F", "q", "E", "it", "neg", "negd")}
         self.fields = {}
         self.rates = [] if rates else None
+        # whether the states carry more than positions (asked once: planar rods do not)
+        q0 = structure.initial_state()
+        self._fielded = bool(structure.state_fields(q0) or system.state_fields(q0))
 
     def add(self, d, F, q, E, it, neg, negd, rate=None):
         st = self.structure
@@ -124,6 +127,8 @@ class Recorder:
         if self.rates is not None:
             self.rates.append(np.full(pos.shape, np.nan) if rate is None else
                               np.array(st.positions_of(rate), dtype=float, copy=True))
+        if not self._fielded:
+            return
         fields = dict(st.state_fields(q))
         fields.update(self.system.state_fields(q))
         for k, v in fields.items():

@@ -40,7 +40,9 @@ class DisplacementProbe:
         a full state vector).
 
         Returns (positions (n_nodes, dim), force along the direction, negative eigenvalues
-        with the displacement held). Raises ConvergenceError."""
+        with the displacement held: of K at the last Newton iterate, within the displacement
+        tolerance of the state, `solver.newton.newton`'s ``settle``). Raises
+        ConvergenceError."""
         c = self.control
         start = state_from(self.structure, guess, "guess")
         held = c.member_dofs[:, c.axis]
@@ -56,7 +58,8 @@ class DisplacementProbe:
             for k in range(1, n_sub + 1):
                 q[held] = self.q0[held] + sign * (d_start + (d - d_start) * k / n_sub)
                 it = newton(self.system, q, 0.0, None, self.tol * self.fscale,
-                            TOL_DISP * self.length, self.max_iter, 0.25 * self.length)
+                            TOL_DISP * self.length, self.max_iter, 0.25 * self.length,
+                            settle=True)
                 if it < 0:
                     break
             if it >= 0:

@@ -24,7 +24,7 @@ from snapmorph.solver.banded import (band_to_dense, envelope_heights, ldlt_facto
                                      ldlt_solve_envelope)
 from snapmorph.solver.frames3d import canonical_twist_offset, reference_twist, transport_frames
 from snapmorph.solver.iteration import (mgdc_iteration, mgdc_iteration3d, newton_iteration,
-                                        newton_iteration3d)
+                                        newton_iteration3d, settle_state)
 from snapmorph.solver.sparse import SparseLDLT, system_factorisation
 
 # A pivot smaller than this times the largest diagonal entry means K is numerically singular
@@ -216,6 +216,14 @@ class BandedSystem:
         self._after_fused(status, neg, energy)
         return status, r_max, du_max, dl
 
+    def settle(self, q, lam, P):
+        """The energy (J) and gradients (N) at ``q``, a state the last correction converged
+        to on the displacements, without assembling or factorising K again: K stays
+        factorised at the iterate before, within the displacement tolerance of q (its
+        inertia and solves hold there to that tolerance). Returns the residual's largest
+        entry, or None where this system cannot (then a full iteration confirms q)."""
+        return None
+
     @property
     def last_correction(self):
         """The reduced increment applied by the last `fused_newton` call that updated q."""
@@ -297,6 +305,14 @@ class ReducedSystem(BandedSystem):
                                  self.grad_full)
         self.energy = self._with_loads(q, energy)
         return self.energy
+
+    def settle(self, q, lam, P):
+        """`BandedSystem.settle` by the compiled gradient-only assembly."""
+        if not self.factor_ok:
+            return None
+        r_max, self.energy = settle_state(q, lam, P, self.elements, self.dofs, self.loads,
+                                          self.grad, self.grad_full, self._work)
+        return r_max
 
     def stiff_second_difference(self, q, du):
         """g(q + du) + g(q - du) - 2 g(q) of the stretching and bond-spring terms of the

@@ -10,7 +10,9 @@ strains dimensionless.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
+from snapmorph.solver.energies import turning_curvature
 from snapmorph.solver.problem import ConvergenceError, load_unit, load_vector, make_control, state_from
 
 NAN = float("nan")
@@ -24,30 +26,53 @@ def surface_strain(P, X, t):
     DER curvature 2 tan(phi / 2) / l (phi the turning angle at the node, l its Voronoi
     length in the stress-free rod) and kappa_bar its stress-free value. ``P``: (..., n, 2)
     deformed node positions along the rod (several states at once), ``X``: (n, 2)
-    stress-free ones (m); ``t``: thickness (m). The two faces carry eps +- dkappa t / 2; the
-    larger magnitude is this sum. End nodes: eps only."""
-    P, X = np.asarray(P, float), np.asarray(X, float)
-    e, e0 = np.diff(P, axis=-2), np.diff(X, axis=-2)
-    ell, ell0 = np.hypot(e[..., 0], e[..., 1]), np.hypot(e0[:, 0], e0[:, 1])
-    eps_edge = ell / ell0 - 1.0
-    eps = np.empty(P.shape[:-1])
-    eps[..., 0], eps[..., -1] = eps_edge[..., 0], eps_edge[..., -1]
-    eps[..., 1:-1] = 0.5 * (eps_edge[..., :-1] + eps_edge[..., 1:])
-    bend = np.zeros(P.shape[:-1])
-    if P.shape[-2] > 2:
-        voronoi = 0.5 * (ell0[:-1] + ell0[1:])
-        bend[..., 1:-1] = np.abs(_curvature(e, ell) - _curvature(e0, ell0)) / voronoi * (0.5 * t)
-    return np.abs(eps) + bend
+    stress-free ones (m); ``t``: thickness (m), one number or one per half edge (n - 1, 2)
+    (a node's is the mean of its two half edges'). The two faces carry eps +- dkappa t / 2;
+    the larger magnitude is this sum. End nodes: eps only. (A compiled loop: the unit's
+    strain searches evaluate it once per solve.)"""
+    P, X = np.asarray(P, float), np.ascontiguousarray(X, dtype=float)
+    n = X.shape[0]
+    t = np.asarray(t, float)
+    if t.ndim == 0:
+        t_node = np.full(n, float(t))
+    else:
+        t = np.broadcast_to(t, (n - 1, 2))
+        t_node = np.zeros(n)
+        t_node[1:-1] = 0.5 * (t[:-1, 1] + t[1:, 0])
+    flat = np.ascontiguousarray(P.reshape(-1, n, 2))
+    out = np.empty(flat.shape[:2])
+    _surface_strain(flat, X, t_node, out)
+    return out.reshape(P.shape[:-1])
 
 
-def _curvature(e, ell):
-    """Integrated DER curvature 2 tan(phi / 2) at the interior nodes of edges ``e`` (..., m,
-    2) of lengths ``ell`` (signed, phi the turning angle from one edge to the next)."""
-    a, b = e[..., :-1, :], e[..., 1:, :]
-    cross = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    dot = a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
-    # tan(phi / 2) = sin(phi) / (1 + cos(phi)) = cross / (|a||b| + dot)
-    return 2.0 * cross / (ell[..., :-1] * ell[..., 1:] + dot)
+@njit(cache=True)
+def _surface_strain(P, X, t_node, out):
+    """`surface_strain` of K states ``P`` (K, n, 2) into ``out`` (K, n); ``t_node`` (n,) m."""
+    n = X.shape[0]
+    here, made = np.empty(6), np.empty(6)  # a node's three positions (the curvature kernel's)
+    for k in range(P.shape[0]):
+        eps_prev = 0.0
+        for i in range(n - 1):
+            ex, ez = P[k, i + 1, 0] - P[k, i, 0], P[k, i + 1, 1] - P[k, i, 1]
+            rest = _length(X, i)
+            eps = np.sqrt(ex * ex + ez * ez) / rest - 1.0
+            if i == 0:
+                out[k, 0] = abs(eps)
+            else:
+                for a in range(3):
+                    for c in range(2):
+                        here[2 * a + c] = P[k, i - 1 + a, c]
+                        made[2 * a + c] = X[i - 1 + a, c]
+                voronoi = 0.5 * (_length(X, i - 1) + rest)
+                dkappa = turning_curvature(here) - turning_curvature(made)
+                out[k, i] = abs(0.5 * (eps_prev + eps)) + abs(dkappa) / voronoi * (0.5 * t_node[i])
+            eps_prev = eps
+        out[k, n - 1] = abs(eps_prev)
+
+
+@njit(cache=True, inline="always")
+def _length(Y, i):
+    return np.sqrt((Y[i + 1, 0] - Y[i, 0]) ** 2 + (Y[i + 1, 1] - Y[i, 1]) ** 2)
 
 
 def largest_strain(positions, X, rods, t):

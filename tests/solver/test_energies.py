@@ -140,3 +140,43 @@ def test_rigid_motion_costs_no_energy(rng):
     c, s = np.cos(0.7), np.sin(0.7)
     moved = X @ np.array([[c, s], [-s, c]]) + np.array([0.3, -1.2])
     assert st.energy(moved) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_gradient_only_kernels_equal_the_full_kernels(rng):
+    """`stretch_gradient`, `bending_gradient`, `spring_gradient` (a converged state's energy
+    and gradient without the Hessian) against `stretch_terms`, `bending_terms`,
+    `spring_terms` on random elements, and `assemble_gradient` against `assemble_system`
+    on a tied, actuated unit (energy, reduced and full gradients)."""
+    from snapmorph.solver.assembly import assemble_gradient, assemble_system
+    from snapmorph.solver.energies import (bending_gradient, spring_gradient,
+                                           stretch_gradient)
+    from snapmorph.units import UnitGeometry
+    from snapmorph.units.geometry import build_unit
+
+    for _ in range(50):
+        x4, x6 = rng.normal(size=4), rng.normal(size=6)
+        EA, rest, k, kb = rng.uniform(0.5, 2.0, size=4)
+        for full, grad_only, x, args in (
+                (stretch_terms, stretch_gradient, x4, (EA, rest)),
+                (bending_terms, bending_gradient, x6, (k, kb)),
+                (spring_terms, spring_gradient, x4, (k, 0.1, -0.2))):
+            g_full, h = np.empty(len(x)), np.empty((len(x), len(x)))
+            g = np.empty(len(x))
+            e_full = full(x, *args, g_full, h)
+            e = grad_only(x, *args, g)
+            assert e == pytest.approx(e_full, rel=1e-12, abs=1e-14)
+            np.testing.assert_allclose(g, g_full, rtol=1e-11, atol=1e-12 * np.max(np.abs(g_full)))
+    for tie in ("exact", "spring"):
+        st = build_unit(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3), nodes=41,
+                        tie=tie).structure
+        s = st.reduced_system()
+        q = st.initial_state() + 1e-4 * rng.normal(size=st.initial_state().shape)
+        e_full = assemble_system(q, s.elements, s.dofs, s.band, s.grad, s.grad_full)
+        g_full, gf_full = s.grad.copy(), s.grad_full.copy()
+        band = s.band.copy()
+        e = assemble_gradient(q, s.elements, s.dofs, s.grad, s.grad_full)
+        assert e == pytest.approx(e_full, rel=1e-12)
+        np.testing.assert_allclose(s.grad, g_full, rtol=1e-10, atol=1e-12 * np.max(np.abs(g_full)))
+        np.testing.assert_allclose(s.grad_full, gf_full, rtol=1e-10,
+                                   atol=1e-12 * np.max(np.abs(gf_full)))
+        assert np.array_equal(s.band, band)  # the stiffness is left as it was
