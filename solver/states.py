@@ -82,9 +82,12 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None, rates=None):
     Each solve starts from the path's own states interpolated to the solve's d (`between`:
     with the samples' ``rates`` dq/dd where the path gives them, else the parabola through
     the three samples; the state is a smooth function of d on the branch), not from an
-    earlier solve: with the node held, the force maximum is close to a bifurcation of the
-    held structure (an asymmetric mode; docs/path-following.md), where K is nearly singular
-    and a Newton started there takes a wild first step."""
+    earlier solve alone: with the node held, the force maximum is close to a bifurcation of
+    the held structure (an asymmetric mode; docs/path-following.md), where K is nearly
+    singular and a Newton started from a state at another d takes a wild first step. A solve
+    closer to an earlier solve than to any sample starts from that solve's state moved by
+    the interpolant's change between the two (the interpolant's error, smooth in d, then
+    cancels to first order: one or two corrections where the samples lie far apart)."""
     a, b = float(d[i - 1]), float(d[i + 1])
     if not a < b:
         raise ConvergenceError("the path is not monotone in d around the maximum")
@@ -99,10 +102,23 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None, rates=None):
     slopes = None if rates is None else [np.asarray(rates[j], dtype=float)
                                           for j in range(i - 1, i + 2)]
 
+    solved = {}  # d -> the solve's positions, when they are of the samples' kind
+
+    def guess(x):
+        g = between(ds, samples, slopes, x)
+        if solved:
+            x0 = min(solved, key=lambda v: abs(v - x))
+            if abs(x - x0) < float(np.min(np.abs(ds - x))):
+                return solved[x0] + (g - between(ds, samples, slopes, x0))
+        return g
+
     def f(x):
         x = float(x)
         if x not in cache:
-            Fx = probe.solve(between(ds, samples, slopes, x), x)[1]
+            pos, Fx = probe.solve(guess(x), x)[:2]
+            pos = np.asarray(pos, dtype=float)
+            if pos.shape == samples[0].shape:
+                solved[x] = pos.copy()
             if not abs(Fx - float(np.interp(x, ds, Fs))) <= 2.0 * spread:
                 raise ConvergenceError(
                     f"the solve at d = {x:.6g} m left the path's branch (F = {Fx:.6g} N against "
