@@ -123,16 +123,16 @@ def _factor(band, heights, pivot_tol):
         m = heights[j] if known else _column_height(band, j, bw, n)
         # right-looking update of the trailing band with the unscaled column; the inner
         # loop counts from 0 so that its indices are provably non-negative: without
-        # negative-index wraparound LLVM vectorises it (2x on the 3-D unit, same bits)
+        # negative-index wraparound LLVM vectorises it (2x on the 3-D unit, same bits).
+        # Step i reads rows i..m of column j: row i is scaled right after it (one division
+        # per entry, not two)
         for i in range(1, m + 1):
             lij = band[i, j] / d
-            if lij == 0.0:
-                continue
-            c = j + i
-            for k in range(m - i + 1):
-                band[k, c] -= band[k + i, j] * lij
-        for i in range(1, m + 1):
-            band[i, j] /= d
+            if lij != 0.0:
+                c = j + i
+                for k in range(m - i + 1):
+                    band[k, c] -= band[k + i, j] * lij
+            band[i, j] = lij
     return 0, negative, min_ratio
 
 
