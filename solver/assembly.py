@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from snapmorph.solver.banded import written_extent
 from snapmorph.solver.energies import (bending_lower, dead_load_terms, spring_lower, stretch_force,
                                        stretch_lower)
 
@@ -171,14 +172,15 @@ def assemble_system(q, elements, dofs, band, grad_red, grad_full):
 @njit(cache=True)
 def assemble_banded(q, elements, dofs, slots, dof_map, band, heights, grad_red, grad_full):
     """`assemble_system` into a Fortran-order band whose entries outside the envelope
-    ``heights`` (`solver.banded.envelope_heights`) are zero and stay so (neither the assembly
-    nor the factor writes there): only the envelope is cleared. ``slots``: `band_slots` of
+    ``heights`` (`solver.banded.envelope_heights`) are zero: only what the assembly and the
+    factor write (`solver.banded.written_extent`) is cleared. ``slots``: `band_slots` of
     ``dofs`` for this band; ``dof_map`` the system's (full -> reduced DOF, -1 held).
     Energy (J); writes the band, the reduced and the full gradient (N)."""
     stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
     stretch_slots, bend_slots, spring_slots = slots
+    bw = band.shape[0] - 1
     for j in range(band.shape[1]):
-        for k in range(heights[j] + 1):
+        for k in range(written_extent(heights, j, bw) + 1):
             band[k, j] = 0.0
     grad_full[:] = 0.0
     flat = band.T.reshape(band.size)  # band[k, j] = flat[j ld + k]

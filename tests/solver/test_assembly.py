@@ -204,3 +204,27 @@ def test_stiff_second_difference_of_a_tied_unit():
     stiff_second_difference(q, plus, minus, system.elements, system.dofs, out)
     scale = np.max(np.abs(reduced_stiff_gradient(q)))
     np.testing.assert_allclose(out, want, rtol=0, atol=1e-13 * scale)
+
+
+def test_a_non_finite_factorisation_leaves_no_trace():
+    """A factor of a band with a NaN (a degenerate state) may write outside the envelope
+    (a short column's fixed window, `solver.banded._eliminate`): the next assembly clears
+    it all."""
+    from snapmorph.solver.banded import _MEDIUM, _SHORT
+
+    rng = np.random.default_rng(6)
+    system = _system("exact")
+    q = _random_state(system, rng)
+    system.evaluate(q)
+    fresh = system.band.copy()
+    h, n, bw = system.heights, system.n, system.band.shape[0] - 1
+    # an entry whose step reaches below the envelope of the column it updates
+    hits = [(i, j) for j in range(n) for w in (_SHORT, _MEDIUM)
+            if h[j] <= w <= bw and j + w < n and (w == _SHORT or h[j] > _SHORT)
+            for i in range(1, h[j] + 1) if h[j + i] < w - i]
+    assert hits
+    system.band[hits[0]] = np.nan
+    system.factor()
+    assert np.isnan(system.band[h[hits[0][1] + hits[0][0]] + 1:, hits[0][1] + hits[0][0]]).any()
+    system.evaluate(q)
+    np.testing.assert_array_equal(system.band, fresh)
