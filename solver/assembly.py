@@ -23,24 +23,94 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from snapmorph.solver.energies import (bending_gradient, bending_terms, dead_load_terms,
-                                       spring_gradient, spring_terms, stretch_gradient,
-                                       stretch_terms)
+from snapmorph.solver.banded import written_extent
+from snapmorph.solver.energies import (bending_gradient, bending_lower, dead_load_terms,
+                                       spring_gradient, spring_lower, stretch_force,
+                                       stretch_gradient, stretch_lower)
 
 
 @njit(cache=True)
-def _scatter(nodes, dofs, nloc, g, h, band, grad_red, grad_full):
+def _add_gradient(nodes, dofs, nloc, g, grad_red, grad_full):
+    """Add an element's gradient ``g`` (nloc,) to the full and the reduced gradient."""
     for a in range(nloc):
         grad_full[2 * nodes[a >> 1] + (a & 1)] += g[a]
         ra = dofs[a]
-        if ra < 0:
-            continue
-        grad_red[ra] += g[a]
-        for b in range(nloc):
+        if ra >= 0:
+            grad_red[ra] += g[a]
+
+
+@njit(cache=True)
+def _add_full(nodes, nloc, g, grad_full):
+    """Add an element's gradient ``g`` (nloc,) to the full gradient."""
+    for a in range(nloc):
+        grad_full[2 * nodes[a >> 1] + (a & 1)] += g[a]
+
+
+@njit(cache=True)
+def _reduce_gradient(dof_map, grad_full, grad_red):
+    """grad_red = W^T grad_full: the same terms as scattering every element's gradient
+    into both, summed per reduced DOF in another order where DOFs are tied (in the same
+    order, so bit for bit, elsewhere). One pass instead of a second scatter per element."""
+    grad_red[:] = 0.0
+    for j in range(dof_map.shape[0]):
+        r = dof_map[j]
+        if r >= 0:
+            grad_red[r] += grad_full[j]
+
+
+@njit(cache=True)
+def _add_lower(dofs, nloc, hl, band):
+    """Add an element's Hessian, its lower triangle packed by rows in ``hl``, to the band of
+    K_red = W^T K W (any memory order). The pair (a, b) and its mirror (b, a) land on one
+    entry of the lower band; on the diagonal when a and b share a reduced DOF (tied), which
+    then receives both."""
+    k = 0
+    for a in range(nloc):
+        ra = dofs[a]
+        for b in range(a + 1):
             rb = dofs[b]
-            if rb < 0 or rb > ra:
+            v = hl[k]
+            k += 1
+            if ra < 0 or rb < 0:
                 continue
-            band[ra - rb, rb] += h[a, b]
+            if ra > rb:
+                band[ra - rb, rb] += v
+            elif rb > ra:
+                band[rb - ra, ra] += v
+            elif a == b:
+                band[0, ra] += v
+            else:
+                band[0, ra] += v + v
+
+
+def band_slots(dofs, ld):
+    """Where the lower triangle of every element's Hessian goes in a Fortran-order band with
+    leading dimension ``ld`` (bandwidth + 1), for the element DOFs ``dofs`` of
+    `element_dofs`: a tuple of (n_elements, k (k + 1) / 2) int64 arrays, the pairs packed by
+    rows as `solver.energies.bending_lower` packs them. Entry 2 s + t: add the value to
+    ``band.T.ravel()[s]``, twice when t = 1 (a pair of distinct coordinates sharing one
+    reduced DOF: both (a, b) and (b, a) reach that diagonal entry); -1: held, skipped.
+    Computed once per system, so that the assembly does no index arithmetic."""
+    out = []
+    for d in dofs:
+        d = np.asarray(d, dtype=np.int64)
+        a, b = np.tril_indices(d.shape[1])
+        ra, rb = d[:, a], d[:, b]
+        lo, hi = np.minimum(ra, rb), np.maximum(ra, rb)
+        twice = (ra == rb) & (a != b)[None, :]
+        slots = np.where((ra >= 0) & (rb >= 0), 2 * (lo * ld + hi - lo) + twice, -1)
+        out.append(np.ascontiguousarray(slots, dtype=np.int64))
+    return tuple(out)
+
+
+@njit(cache=True)
+def _add_slots(slots, npairs, hl, flat):
+    """Add a packed lower triangle ``hl`` at its `band_slots` ``slots`` of the flat band."""
+    for k in range(npairs):
+        s = slots[k]
+        if s >= 0:
+            v = hl[k]
+            flat[s >> 1] += v + v if s & 1 else v
 
 
 def element_dofs(elements, dof_map):
@@ -67,7 +137,8 @@ def assemble_system(q, elements, dofs, band, grad_red, grad_full):
     """Energy (J); writes the reduced band K, reduced gradient and full gradient (N).
 
     ``q`` is the flat (2 n_nodes,) array of current positions in metres; ``dofs`` comes
-    from `element_dofs` for the system's DOF map.
+    from `element_dofs` for the system's DOF map. Any band of the bandwidth (the systems'
+    Fortran-order bands: `assemble_banded`, faster).
     """
     stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
     stretch_dofs, bend_dofs, spring_dofs = dofs
@@ -75,25 +146,88 @@ def assemble_system(q, elements, dofs, band, grad_red, grad_full):
     grad_red[:] = 0.0
     grad_full[:] = 0.0
     energy = 0.0
-    x4, g4, h4 = np.empty(4), np.empty(4), np.empty((4, 4))
-    x6, g6, h6 = np.empty(6), np.empty(6), np.empty((6, 6))
+    x4, g4, h10 = np.empty(4), np.empty(4), np.empty(10)
+    x6, g6, h21 = np.empty(6), np.empty(6), np.empty(21)
     for e in range(stretch_nodes.shape[0]):
         nodes = stretch_nodes[e]
         _gather(q, nodes, 2, x4)
-        energy += stretch_terms(x4, stretch_params[e, 0], stretch_params[e, 1], g4, h4)
-        _scatter(nodes, stretch_dofs[e], 4, g4, h4, band, grad_red, grad_full)
+        energy += stretch_lower(x4, stretch_params[e, 0], stretch_params[e, 1], g4, h10)
+        _add_gradient(nodes, stretch_dofs[e], 4, g4, grad_red, grad_full)
+        _add_lower(stretch_dofs[e], 4, h10, band)
     for e in range(bend_nodes.shape[0]):
         nodes = bend_nodes[e]
         _gather(q, nodes, 3, x6)
-        energy += bending_terms(x6, bend_params[e, 0], bend_params[e, 1], g6, h6)
-        _scatter(nodes, bend_dofs[e], 6, g6, h6, band, grad_red, grad_full)
+        energy += bending_lower(x6, bend_params[e, 0], bend_params[e, 1], g6, h21)
+        _add_gradient(nodes, bend_dofs[e], 6, g6, grad_red, grad_full)
+        _add_lower(bend_dofs[e], 6, h21, band)
     for e in range(spring_nodes.shape[0]):
         nodes = spring_nodes[e]
         _gather(q, nodes, 2, x4)
         k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
-        energy += spring_terms(x4, k, ox, oz, g4, h4)
-        _scatter(nodes, spring_dofs[e], 4, g4, h4, band, grad_red, grad_full)
+        energy += spring_lower(x4, k, ox, oz, g4, h10)
+        _add_gradient(nodes, spring_dofs[e], 4, g4, grad_red, grad_full)
+        _add_lower(spring_dofs[e], 4, h10, band)
     return energy
+
+
+@njit(cache=True)
+def assemble_banded(q, elements, dofs, slots, dof_map, band, heights, grad_red, grad_full):
+    """`assemble_system` into a Fortran-order band whose entries outside the envelope
+    ``heights`` (`solver.banded.envelope_heights`) are zero: only what the assembly and the
+    factor write (`solver.banded.written_extent`) is cleared. ``slots``: `band_slots` of
+    ``dofs`` for this band; ``dof_map`` the system's (full -> reduced DOF, -1 held).
+    Energy (J); writes the band, the reduced and the full gradient (N)."""
+    stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
+    stretch_slots, bend_slots, spring_slots = slots
+    bw = band.shape[0] - 1
+    for j in range(band.shape[1]):
+        for k in range(written_extent(heights, j, bw) + 1):
+            band[k, j] = 0.0
+    grad_full[:] = 0.0
+    flat = band.T.reshape(band.size)  # band[k, j] = flat[j ld + k]
+    energy = 0.0
+    x4, g4, h10 = np.empty(4), np.empty(4), np.empty(10)
+    x6, g6, h21 = np.empty(6), np.empty(6), np.empty(21)
+    for e in range(stretch_nodes.shape[0]):
+        nodes = stretch_nodes[e]
+        _gather(q, nodes, 2, x4)
+        energy += stretch_lower(x4, stretch_params[e, 0], stretch_params[e, 1], g4, h10)
+        _add_full(nodes, 4, g4, grad_full)
+        _add_slots(stretch_slots[e], 10, h10, flat)
+    for e in range(bend_nodes.shape[0]):
+        nodes = bend_nodes[e]
+        _gather(q, nodes, 3, x6)
+        energy += bending_lower(x6, bend_params[e, 0], bend_params[e, 1], g6, h21)
+        _add_full(nodes, 6, g6, grad_full)
+        _add_slots(bend_slots[e], 21, h21, flat)
+    for e in range(spring_nodes.shape[0]):
+        nodes = spring_nodes[e]
+        _gather(q, nodes, 2, x4)
+        k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
+        energy += spring_lower(x4, k, ox, oz, g4, h10)
+        _add_full(nodes, 4, g4, grad_full)
+        _add_slots(spring_slots[e], 10, h10, flat)
+    _reduce_gradient(dof_map, grad_full, grad_red)
+    return energy
+
+
+@njit(cache=True, inline="always")
+def _spring_force(q, nodes, k, ox, oz):
+    """dE/dx_b (N) of the tie spring between ``nodes`` in the flat state ``q``:
+    E = k/2 |x_a - x_b - offset|^2."""
+    a, b = 2 * nodes[0], 2 * nodes[1]
+    return -k * (q[a] - q[b] - ox), -k * (q[a + 1] - q[b + 1] - oz)
+
+
+@njit(cache=True)
+def _add_pair_force(rd, gx, gz, weight, out):
+    """Add ``weight`` times the gradient (-g, g), g = (gx, gz) (N), of a two-node element
+    at its reduced DOFs ``rd`` (4,)."""
+    for a in range(4):
+        r = rd[a]
+        if r >= 0:
+            g = gx if (a & 1) == 0 else gz
+            out[r] += weight * (g if a >= 2 else -g)
 
 
 @njit(cache=True)
@@ -105,24 +239,26 @@ def stiff_second_difference(q, q_plus, q_minus, elements, dofs, out):
     stretch_nodes, stretch_params, _, _, spring_nodes, spring_params = elements
     stretch_dofs, _, spring_dofs = dofs
     out[:] = 0.0
-    x, g, h = np.empty(4), np.empty(4), np.empty((4, 4))
+    # gradients only (no Hessians): dE/dx_b = g = -dE/dx_a for both kinds of element
     for e in range(stretch_nodes.shape[0]):
         nodes, rd = stretch_nodes[e], stretch_dofs[e]
-        for state, weight in ((q_plus, 1.0), (q_minus, 1.0), (q, -2.0)):
-            _gather(state, nodes, 2, x)
-            stretch_terms(x, stretch_params[e, 0], stretch_params[e, 1], g, h)
-            for a in range(4):
-                if rd[a] >= 0:
-                    out[rd[a]] += weight * g[a]
+        EA, rest = stretch_params[e, 0], stretch_params[e, 1]
+        # (the three states written out: a loop over a tuple of arrays costs 3x here)
+        gx, gz = stretch_force(q_plus, nodes, EA, rest)
+        _add_pair_force(rd, gx, gz, 1.0, out)
+        gx, gz = stretch_force(q_minus, nodes, EA, rest)
+        _add_pair_force(rd, gx, gz, 1.0, out)
+        gx, gz = stretch_force(q, nodes, EA, rest)
+        _add_pair_force(rd, gx, gz, -2.0, out)
     for e in range(spring_nodes.shape[0]):
         nodes, rd = spring_nodes[e], spring_dofs[e]
         k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
-        for state, weight in ((q_plus, 1.0), (q_minus, 1.0), (q, -2.0)):
-            _gather(state, nodes, 2, x)
-            spring_terms(x, k, ox, oz, g, h)
-            for a in range(4):
-                if rd[a] >= 0:
-                    out[rd[a]] += weight * g[a]
+        gx, gz = _spring_force(q_plus, nodes, k, ox, oz)
+        _add_pair_force(rd, gx, gz, 1.0, out)
+        gx, gz = _spring_force(q_minus, nodes, k, ox, oz)
+        _add_pair_force(rd, gx, gz, 1.0, out)
+        gx, gz = _spring_force(q, nodes, k, ox, oz)
+        _add_pair_force(rd, gx, gz, -2.0, out)
 
 
 @njit(cache=True)
@@ -169,14 +305,12 @@ def total_energy(q, elements):
 
 
 @njit(cache=True)
-def assemble_gradient(q, elements, dofs, grad_red, grad_full):
-    """`assemble_system` without the stiffness: the energy (J), the reduced and the full
-    gradient (N) at ``q``, the band untouched (a few microseconds against the full
-    assembly's tens: what a state Newton has converged to needs, `solver.system.
-    BandedSystem.settle`)."""
+def assemble_gradient(q, elements, dof_map, grad_red, grad_full):
+    """`assemble_banded` without the stiffness: the energy (J), the full and the reduced
+    gradient (N) at ``q`` (the same bits), the band untouched (a third of the full
+    assembly's time: what a state Newton has converged to needs, `solver.system.
+    BandedSystem.settle`). ``dof_map``: the system's (full -> reduced DOF, -1 held)."""
     stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
-    stretch_dofs, bend_dofs, spring_dofs = dofs
-    grad_red[:] = 0.0
     grad_full[:] = 0.0
     energy = 0.0
     x4, g4 = np.empty(4), np.empty(4)
@@ -185,24 +319,17 @@ def assemble_gradient(q, elements, dofs, grad_red, grad_full):
         nodes = stretch_nodes[e]
         _gather(q, nodes, 2, x4)
         energy += stretch_gradient(x4, stretch_params[e, 0], stretch_params[e, 1], g4)
-        _scatter_gradient(nodes, stretch_dofs[e], 4, g4, grad_red, grad_full)
+        _add_full(nodes, 4, g4, grad_full)
     for e in range(bend_nodes.shape[0]):
         nodes = bend_nodes[e]
         _gather(q, nodes, 3, x6)
         energy += bending_gradient(x6, bend_params[e, 0], bend_params[e, 1], g6)
-        _scatter_gradient(nodes, bend_dofs[e], 6, g6, grad_red, grad_full)
+        _add_full(nodes, 6, g6, grad_full)
     for e in range(spring_nodes.shape[0]):
         nodes = spring_nodes[e]
         _gather(q, nodes, 2, x4)
         k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
         energy += spring_gradient(x4, k, ox, oz, g4)
-        _scatter_gradient(nodes, spring_dofs[e], 4, g4, grad_red, grad_full)
+        _add_full(nodes, 4, g4, grad_full)
+    _reduce_gradient(dof_map, grad_full, grad_red)
     return energy
-
-
-@njit(cache=True, inline="always")
-def _scatter_gradient(nodes, dofs, nloc, g, grad_red, grad_full):
-    for a in range(nloc):
-        grad_full[2 * nodes[a >> 1] + (a & 1)] += g[a]
-        if dofs[a] >= 0:
-            grad_red[dofs[a]] += g[a]

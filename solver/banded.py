@@ -112,6 +112,37 @@ def ldlt_factor_envelope(band, heights, pivot_tol):
     return _factor(band, heights, pivot_tol)
 
 
+# Fixed windows for short columns (`_eliminate`): a planar rod's columns reach 5 rows
+# below the diagonal (bending couples 3 nodes), two bonded rods' (a unit) mostly 8-9.
+_SHORT = 5
+_MEDIUM = 9
+
+
+@njit(cache=True, inline="always")
+def written_extent(heights, j, bw):
+    """The last row of column j of a band (bandwidth ``bw``, envelope ``heights``) that the
+    factor may write: the envelope, or a short column's fixed window (`_eliminate`), where
+    it adds zeros outside the envelope (or, factorising a non-finite band, non-finite
+    values). An assembly that clears this much leaves no trace of a factor."""
+    return max(heights[j], min(_MEDIUM, bw))
+
+
+@njit(cache=True)
+def _eliminate(band, j, d, w):
+    """The factor's step at column j (pivot d) for a column whose nonzeros lie within ``w``
+    rows below the diagonal, ``w`` a constant at each call (the loops unroll once the call
+    is inlined; a plain call, not numba's inlining, which keeps them rolled). The same
+    operations as the general loop on the nonzeros; the rows below the column's envelope
+    are zeros and only add zeros (x - 0 l = x, up to the sign of a zero) to entries that
+    stay zero."""
+    for i in range(1, w + 1):
+        lij = band[i, j] / d
+        c = j + i
+        for k in range(w - i + 1):
+            band[k, c] -= band[k + i, j] * lij
+        band[i, j] = lij
+
+
 @njit(cache=True, inline="always")
 def _factor(band, heights, pivot_tol):
     bw = band.shape[0] - 1
@@ -136,18 +167,26 @@ def _factor(band, heights, pivot_tol):
         if d < 0.0:
             negative += 1
         m = heights[j] if known else _column_height(band, j, bw, n)
+        # a short column within a fixed window (its rows below m are zeros, outside the
+        # envelope): loops of constant length, unrolled (most columns of planar rods)
+        if m <= _SHORT and bw >= _SHORT and j + _SHORT < n:
+            _eliminate(band, j, d, _SHORT)
+            continue
+        if m <= _MEDIUM and bw >= _MEDIUM and j + _MEDIUM < n:
+            _eliminate(band, j, d, _MEDIUM)
+            continue
         # right-looking update of the trailing band with the unscaled column; the inner
         # loop counts from 0 so that its indices are provably non-negative: without
-        # negative-index wraparound LLVM vectorises it (2x on the 3-D unit, same bits)
+        # negative-index wraparound LLVM vectorises it (2x on the 3-D unit, same bits).
+        # Step i reads rows i..m of column j: row i is scaled right after it (one division
+        # per entry, not two)
         for i in range(1, m + 1):
             lij = band[i, j] / d
-            if lij == 0.0:
-                continue
-            c = j + i
-            for k in range(m - i + 1):
-                band[k, c] -= band[k + i, j] * lij
-        for i in range(1, m + 1):
-            band[i, j] /= d
+            if lij != 0.0:
+                c = j + i
+                for k in range(m - i + 1):
+                    band[k, c] -= band[k + i, j] * lij
+            band[i, j] = lij
     return 0, negative, min_ratio
 
 
@@ -168,6 +207,8 @@ def _solve(band, heights, b):
     # all right-hand sides in one sweep over the factor: each column of L is read once
     n = band.shape[1]
     nc = b.shape[1]
+    if nc == 2:
+        return _solve2(band, heights, b)
     for j in range(n):
         m = heights[j]
         for c in range(nc):
@@ -186,6 +227,39 @@ def _solve(band, heights, b):
             for i in range(1, m + 1):
                 s -= band[i, j] * b[j + i, c]
             b[j, c] = s
+    return b
+
+
+@njit(cache=True)
+def _solve2(band, heights, b):
+    """`_solve` for two right-hand sides (an MGDC corrector's): both in the same loops, so
+    that the back substitution runs two independent sums at once (it waits on the latency
+    of each subtraction otherwise). The same operations in the same order per right-hand
+    side (a zero entry of one side is carried along when the other's is not: x - l 0 = x)."""
+    n = band.shape[1]
+    for j in range(n):
+        m = heights[j]
+        v0 = b[j, 0]
+        v1 = b[j, 1]
+        if v0 != 0.0 or v1 != 0.0:
+            for k in range(m):
+                lk = band[k + 1, j]
+                b[j + 1 + k, 0] -= lk * v0
+                b[j + 1 + k, 1] -= lk * v1
+    for j in range(n):
+        d = band[0, j]
+        b[j, 0] /= d
+        b[j, 1] /= d
+    for j in range(n - 1, -1, -1):
+        m = heights[j]
+        s0 = b[j, 0]
+        s1 = b[j, 1]
+        for i in range(1, m + 1):
+            li = band[i, j]
+            s0 -= li * b[j + i, 0]
+            s1 -= li * b[j + i, 1]
+        b[j, 0] = s0
+        b[j, 1] = s1
     return b
 
 

@@ -20,12 +20,10 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
-def stretch_terms(x, EA, rest_length, grad, hess):
-    """Stretching energy of one edge; ``x`` = [xa, za, xb, zb] (m), EA (N), rest length (m).
-
-    Writes d(E)/dx into ``grad`` (4,) and d2(E)/dx2 into ``hess`` (4, 4); returns E (J).
-    """
+@njit(cache=True, inline="always")
+def _stretch_jet(x, EA, rest_length):
+    """(E (J), d(E)/d(xb) = (gx, gz) (N), the 2x2 block (hxx, hxz, hzz) (N/m)) of one edge;
+    d(E)/d(xa) = -(gx, gz) and d2(E)/dx2 = [[H, -H], [-H, H]]."""
     ex = x[2] - x[0]
     ez = x[3] - x[1]
     length = np.sqrt(ex * ex + ez * ez)
@@ -34,17 +32,38 @@ def stretch_terms(x, EA, rest_length, grad, hess):
     energy = 0.5 * k * stretch * stretch
     tx = ex / length
     tz = ez / length
-    gx = k * stretch * tx
-    gz = k * stretch * tz
-    grad[0] = -gx
-    grad[1] = -gz
-    grad[2] = gx
-    grad[3] = gz
     # d2E/de2 = k [t t^T + (1 - rest/length)(I - t t^T)]
     c = k * stretch / length
     hxx = k * tx * tx + c * (1.0 - tx * tx)
     hzz = k * tz * tz + c * (1.0 - tz * tz)
     hxz = k * tx * tz - c * tx * tz
+    return energy, k * stretch * tx, k * stretch * tz, hxx, hxz, hzz
+
+
+@njit(cache=True, inline="always")
+def stretch_force(q, nodes, EA, rest_length):
+    """dE/dx_b = (gx, gz) (N) of the edge between ``nodes`` (a, b) in the flat state ``q``
+    (`stretch_terms` without its Hessian: dE/dx_a = -(gx, gz), the same bits)."""
+    a, b = 2 * nodes[0], 2 * nodes[1]
+    ex = q[b] - q[a]
+    ez = q[b + 1] - q[a + 1]
+    length = np.sqrt(ex * ex + ez * ez)
+    k = EA / rest_length
+    stretch = length - rest_length
+    return k * stretch * (ex / length), k * stretch * (ez / length)
+
+
+@njit(cache=True)
+def stretch_terms(x, EA, rest_length, grad, hess):
+    """Stretching energy of one edge; ``x`` = [xa, za, xb, zb] (m), EA (N), rest length (m).
+
+    Writes d(E)/dx into ``grad`` (4,) and d2(E)/dx2 into ``hess`` (4, 4); returns E (J).
+    """
+    energy, gx, gz, hxx, hxz, hzz = _stretch_jet(x, EA, rest_length)
+    grad[0] = -gx
+    grad[1] = -gz
+    grad[2] = gx
+    grad[3] = gz
     for a in range(2):
         for b in range(2):
             sign = 1.0 if a == b else -1.0
@@ -56,29 +75,97 @@ def stretch_terms(x, EA, rest_length, grad, hess):
 
 
 @njit(cache=True, inline="always")
-def _block(h, bi, bj, a00, a01, a10, a11):
-    """Write the 2x2 block (bi, bj) of a symmetric 6x6 matrix and its transpose."""
-    r = 2 * bi
-    c = 2 * bj
-    h[r, c] = a00
-    h[r, c + 1] = a01
-    h[r + 1, c] = a10
-    h[r + 1, c + 1] = a11
-    h[c, r] = a00
-    h[c + 1, r] = a01
-    h[c, r + 1] = a10
-    h[c + 1, r + 1] = a11
+def _turning_jet(x):
+    """kappa at the middle node of ``x`` (6,) and what its derivatives are made of.
+
+    kappa = 2 tan(phi/2) depends on the node coordinates through the turning angle
+    phi = theta1 - theta0 only (theta_i = direction of edge i), so
+    d(kappa) = k1 d(phi), d2(kappa) = k2 d(phi) d(phi)^T + k1 d2(phi) with
+    k1 = 1 + kappa^2/4, k2 = kappa k1 / 2. d(theta)/de = (-ez, ex)/|e|^2 for an edge e and
+    d2(theta)/de2 = [[2 ex ez, ez^2 - ex^2], [., -2 ex ez]]/|e|^4: no cross-edge terms. Returns
+    (kappa, k1, k2, P (6 node components of d(phi)), u0, v0, u1, v1) with
+    d2(phi)/de_i^2 = [[u_i, v_i], [v_i, -u_i]] (1/m^2 and 1/m)."""
+    a0 = x[2] - x[0]
+    b0 = x[3] - x[1]
+    a1 = x[4] - x[2]
+    b1 = x[5] - x[3]
+    s0 = a0 * a0 + b0 * b0
+    s1 = a1 * a1 + b1 * b1
+    # kappa = 2 f / g, f = e0 x e1, g = |e0||e1| + e0 . e1 (as `turning_curvature`)
+    g = np.sqrt(s0) * np.sqrt(s1) + a0 * a1 + b0 * b1
+    kappa = 2.0 * (a0 * b1 - b0 * a1) / g
+    k1 = 1.0 + 0.25 * kappa * kappa
+    k2 = 0.5 * kappa * k1
+    # d(phi)/de0 = -d(theta0)/de0, d(phi)/de1 = d(theta1)/de1
+    p0x = b0 / s0
+    p0z = -a0 / s0
+    p1x = -b1 / s1
+    p1z = a1 / s1
+    # in terms of p: d2(phi)/de0^2 = [[2 px pz, pz^2 - px^2], .], d2(phi)/de1^2 its negative
+    u0 = 2.0 * p0x * p0z
+    v0 = p0z * p0z - p0x * p0x
+    u1 = -2.0 * p1x * p1z
+    v1 = p1x * p1x - p1z * p1z
+    # nodes: e0 = x1 - x0, e1 = x2 - x1
+    return (kappa, k1, k2, -p0x, -p0z, p0x - p1x, p0z - p1z, p1x, p1z, u0, v0, u1, v1)
 
 
 @njit(cache=True, inline="always")
-def _kappa_ee(i, j, f, inv_g, fe, ge, gee, fee):
-    """d2(kappa)/de_i de_j of kappa = 2 f / g (quotient rule, twice)."""
-    return 2.0 * inv_g * (
-        fee[i][j]
-        - (fe[i] * ge[j] + ge[i] * fe[j]) * inv_g
-        - f * gee[i][j] * inv_g
-        + 2.0 * f * ge[i] * ge[j] * inv_g * inv_g
-    )
+def _turning_lower(jet, alpha, beta, grad, hl):
+    """grad = alpha d(phi) (6,) and the lower triangle of beta d(phi) d(phi)^T + alpha d2(phi)
+    packed by rows into ``hl`` (21,) (row r, column c <= r at r (r + 1) / 2 + c).
+
+    d2(phi) in the nodes from the edge blocks T_i = d2(phi)/de_i^2: [[T0, -T0, 0],
+    [-T0, T0 + T1, -T1], [0, -T1, T1]]."""
+    _, _, _, P0, P1, P2, P3, P4, P5, u0, v0, u1, v1 = jet
+    grad[0] = alpha * P0
+    grad[1] = alpha * P1
+    grad[2] = alpha * P2
+    grad[3] = alpha * P3
+    grad[4] = alpha * P4
+    grad[5] = alpha * P5
+    a0 = alpha * u0
+    b0 = alpha * v0
+    a1 = alpha * u1
+    b1 = alpha * v1
+    q0 = beta * P0
+    q1 = beta * P1
+    q2 = beta * P2
+    q3 = beta * P3
+    q4 = beta * P4
+    q5 = beta * P5
+    hl[0] = q0 * P0 + a0
+    hl[1] = q1 * P0 + b0
+    hl[2] = q1 * P1 - a0
+    hl[3] = q2 * P0 - a0
+    hl[4] = q2 * P1 - b0
+    hl[5] = q2 * P2 + (a0 + a1)
+    hl[6] = q3 * P0 - b0
+    hl[7] = q3 * P1 + a0
+    hl[8] = q3 * P2 + (b0 + b1)
+    hl[9] = q3 * P3 - (a0 + a1)
+    hl[10] = q4 * P0
+    hl[11] = q4 * P1
+    hl[12] = q4 * P2 - a1
+    hl[13] = q4 * P3 - b1
+    hl[14] = q4 * P4 + a1
+    hl[15] = q5 * P0
+    hl[16] = q5 * P1
+    hl[17] = q5 * P2 - b1
+    hl[18] = q5 * P3 + a1
+    hl[19] = q5 * P4 + b1
+    hl[20] = q5 * P5 - a1
+
+
+@njit(cache=True, inline="always")
+def _unpack_lower(hl, n, h):
+    """The symmetric (n, n) ``h`` from its lower triangle packed by rows in ``hl``."""
+    k = 0
+    for r in range(n):
+        for c in range(r + 1):
+            h[r, c] = hl[k]
+            h[c, r] = hl[k]
+            k += 1
 
 
 @njit(cache=True)
@@ -89,84 +176,24 @@ def curvature_terms(x, dkappa, d2kappa):
     (dimensionless, positive for a counter-clockwise turn).
     Writes d(kappa)/dx (6,) and d2(kappa)/dx2 (6, 6); returns kappa.
     """
-    # Derivatives are taken with respect to the edge vectors (a0, b0, a1, b1) first and then
-    # mapped to the node coordinates; everything stays in registers (no allocation), since
-    # this kernel runs once per node per Newton iteration.
-    a0 = x[2] - x[0]
-    b0 = x[3] - x[1]
-    a1 = x[4] - x[2]
-    b1 = x[5] - x[3]
-    n0 = np.sqrt(a0 * a0 + b0 * b0)
-    n1 = np.sqrt(a1 * a1 + b1 * b1)
-    f = a0 * b1 - b0 * a1
-    g = n0 * n1 + a0 * a1 + b0 * b1
-    inv_g = 1.0 / g
-    kappa = 2.0 * f * inv_g
+    jet = _turning_jet(x)
+    hl = np.empty(21)
+    _turning_lower(jet, jet[1], jet[2], dkappa, hl)
+    _unpack_lower(hl, 6, d2kappa)
+    return jet[0]
 
-    fe = (b1, -a1, -b0, a0)
-    t0x = a0 / n0
-    t0z = b0 / n0
-    t1x = a1 / n1
-    t1z = b1 / n1
-    ge = (n1 * t0x + a1, n1 * t0z + b1, n0 * t1x + a0, n0 * t1z + b0)
-    r01 = n1 / n0
-    r10 = n0 / n1
-    g00 = r01 * (1.0 - t0x * t0x)
-    g11 = r01 * (1.0 - t0z * t0z)
-    g01 = -r01 * t0x * t0z
-    g22 = r10 * (1.0 - t1x * t1x)
-    g33 = r10 * (1.0 - t1z * t1z)
-    g23 = -r10 * t1x * t1z
-    g02 = t0x * t1x + 1.0
-    g03 = t0x * t1z
-    g12 = t0z * t1x
-    g13 = t0z * t1z + 1.0
-    gee = (
-        (g00, g01, g02, g03),
-        (g01, g11, g12, g13),
-        (g02, g12, g22, g23),
-        (g03, g13, g23, g33),
-    )
-    # f is bilinear: its only second derivatives are d2f/da0 db1 = 1, d2f/db0 da1 = -1
-    fee = (
-        (0.0, 0.0, 0.0, 1.0),
-        (0.0, 0.0, -1.0, 0.0),
-        (0.0, -1.0, 0.0, 0.0),
-        (1.0, 0.0, 0.0, 0.0),
-    )
-    ke = (
-        2.0 * (fe[0] - f * ge[0] * inv_g) * inv_g,
-        2.0 * (fe[1] - f * ge[1] * inv_g) * inv_g,
-        2.0 * (fe[2] - f * ge[2] * inv_g) * inv_g,
-        2.0 * (fe[3] - f * ge[3] * inv_g) * inv_g,
-    )
-    k00 = _kappa_ee(0, 0, f, inv_g, fe, ge, gee, fee)
-    k01 = _kappa_ee(0, 1, f, inv_g, fe, ge, gee, fee)
-    k02 = _kappa_ee(0, 2, f, inv_g, fe, ge, gee, fee)
-    k03 = _kappa_ee(0, 3, f, inv_g, fe, ge, gee, fee)
-    k11 = _kappa_ee(1, 1, f, inv_g, fe, ge, gee, fee)
-    k12 = _kappa_ee(1, 2, f, inv_g, fe, ge, gee, fee)
-    k13 = _kappa_ee(1, 3, f, inv_g, fe, ge, gee, fee)
-    k22 = _kappa_ee(2, 2, f, inv_g, fe, ge, gee, fee)
-    k23 = _kappa_ee(2, 3, f, inv_g, fe, ge, gee, fee)
-    k33 = _kappa_ee(3, 3, f, inv_g, fe, ge, gee, fee)
-    # gradient: d/dx0 = -k_e0, d/dx1 = k_e0 - k_e1, d/dx2 = k_e1
-    dkappa[0] = -ke[0]
-    dkappa[1] = -ke[1]
-    dkappa[2] = ke[0] - ke[2]
-    dkappa[3] = ke[1] - ke[3]
-    dkappa[4] = ke[2]
-    dkappa[5] = ke[3]
-    # Hessian blocks from K00 = d2k/de0de0, K01 = d2k/de0de1, K11 = d2k/de1de1:
-    # [[K00, K01 - K00, -K01], [., K00 - K01 - K10 + K11, K01 - K11], [., ., K11]]
-    _block(d2kappa, 0, 0, k00, k01, k01, k11)
-    _block(d2kappa, 0, 1, k02 - k00, k03 - k01, k12 - k01, k13 - k11)
-    _block(d2kappa, 0, 2, -k02, -k03, -k12, -k13)
-    _block(d2kappa, 1, 1, k00 - 2.0 * k02 + k22, k01 - k03 - k12 + k23,
-           k01 - k12 - k03 + k23, k11 - 2.0 * k13 + k33)
-    _block(d2kappa, 1, 2, k02 - k22, k03 - k23, k12 - k23, k13 - k33)
-    _block(d2kappa, 2, 2, k22, k23, k23, k33)
-    return kappa
+
+@njit(cache=True, inline="always")
+def bending_lower(x, stiffness, kappa_bar, grad, hl):
+    """`bending_terms` with the Hessian's lower triangle packed by rows into ``hl`` (21,)
+    (row r, column c <= r at r (r + 1) / 2 + c): what the assembler scatters. Returns E (J)."""
+    jet = _turning_jet(x)
+    kappa, k1, k2 = jet[0], jet[1], jet[2]
+    dev = kappa - kappa_bar
+    c = stiffness * dev
+    # E = S/2 (kappa - kappa_bar)^2: dE/dphi = c k1, d2E/dphi2 = S k1^2 + c k2
+    _turning_lower(jet, c * k1, stiffness * k1 * k1 + c * k2, grad, hl)
+    return 0.5 * stiffness * dev * dev
 
 
 @njit(cache=True)
@@ -175,16 +202,10 @@ def bending_terms(x, stiffness, kappa_bar, grad, hess):
 
     Writes the gradient (6,) and Hessian (6, 6); returns E (J).
     """
-    # grad and hess first receive d(kappa) and d2(kappa), then are scaled in place
-    kappa = curvature_terms(x, grad, hess)
-    dev = kappa - kappa_bar
-    c = stiffness * dev
-    for p in range(6):
-        for q in range(6):
-            hess[p, q] = c * hess[p, q] + stiffness * grad[p] * grad[q]
-    for p in range(6):
-        grad[p] *= c
-    return 0.5 * stiffness * dev * dev
+    hl = np.empty(21)
+    energy = bending_lower(x, stiffness, kappa_bar, grad, hl)
+    _unpack_lower(hl, 6, hess)
+    return energy
 
 
 @njit(cache=True)
@@ -211,6 +232,49 @@ def spring_terms(x, stiffness, rest_offset_x, rest_offset_z, grad, hess):
     return 0.5 * stiffness * (dx * dx + dz * dz)
 
 
+@njit(cache=True, inline="always")
+def pair_lower(hxx, hxz, hzz, hl):
+    """The lower triangle of [[H, -H], [-H, H]] (the Hessian of an edge or a tie spring in
+    its 4 coordinates, H = [[hxx, hxz], [hxz, hzz]]) packed by rows into ``hl`` (10,)."""
+    hl[0] = hxx
+    hl[1] = hxz
+    hl[2] = hzz
+    hl[3] = -hxx
+    hl[4] = -hxz
+    hl[5] = hxx
+    hl[6] = -hxz
+    hl[7] = -hzz
+    hl[8] = hxz
+    hl[9] = hzz
+
+
+@njit(cache=True, inline="always")
+def stretch_lower(x, EA, rest_length, grad, hl):
+    """`stretch_terms` with the Hessian's lower triangle packed by rows into ``hl`` (10,)
+    (what the assembler scatters). Returns E (J)."""
+    energy, gx, gz, hxx, hxz, hzz = _stretch_jet(x, EA, rest_length)
+    grad[0] = -gx
+    grad[1] = -gz
+    grad[2] = gx
+    grad[3] = gz
+    pair_lower(hxx, hxz, hzz, hl)
+    return energy
+
+
+@njit(cache=True, inline="always")
+def spring_lower(x, stiffness, rest_offset_x, rest_offset_z, grad, hl):
+    """`spring_terms` with the Hessian's lower triangle packed by rows into ``hl`` (10,).
+    Returns E (J)."""
+    dx = x[0] - x[2] - rest_offset_x
+    dz = x[1] - x[3] - rest_offset_z
+    grad[0] = stiffness * dx
+    grad[1] = stiffness * dz
+    grad[2] = -stiffness * dx
+    grad[3] = -stiffness * dz
+    pair_lower(stiffness, 0.0, stiffness, hl)
+    return 0.5 * stiffness * (dx * dx + dz * dz)
+
+
 @njit(cache=True)
 def turning_curvature(x):
     """Integrated curvature 2 tan(phi/2) at the middle of three nodes (no derivatives)."""
@@ -234,59 +298,34 @@ def dead_load_terms(x, force, x_ref):
 
 
 # ---------------------------------------------------------------------------- gradients only
-# The energy and gradient of each term without its Hessian: what a state that Newton has
-# converged to needs (its force and energy), the stiffness being factorised already at the
-# iterate before it (`solver.assembly.assemble_gradient`).
+# The energy and gradient of each term without its Hessian, from the same jets (the same
+# bits as the `*_lower` kernels' gradients): what a state Newton has converged to needs (its
+# force and energy), the stiffness being factorised already at the iterate before it
+# (`solver.assembly.assemble_gradient`).
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def stretch_gradient(x, EA, rest_length, grad):
     """`stretch_terms` without the Hessian: writes d(E)/dx (4,), returns E (J)."""
-    ex = x[2] - x[0]
-    ez = x[3] - x[1]
-    length = np.sqrt(ex * ex + ez * ez)
-    k = EA / rest_length
-    stretch = length - rest_length
-    gx = k * stretch * (ex / length)
-    gz = k * stretch * (ez / length)
+    energy, gx, gz, _, _, _ = _stretch_jet(x, EA, rest_length)
     grad[0] = -gx
     grad[1] = -gz
     grad[2] = gx
     grad[3] = gz
-    return 0.5 * k * stretch * stretch
+    return energy
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bending_gradient(x, stiffness, kappa_bar, grad):
-    """`bending_terms` without the Hessian: writes d(E)/dx (6,), returns E (J). The
-    curvature kappa = 2 f / g and its derivatives with respect to the edge vectors as in
-    `curvature_terms`."""
-    a0 = x[2] - x[0]
-    b0 = x[3] - x[1]
-    a1 = x[4] - x[2]
-    b1 = x[5] - x[3]
-    n0 = np.sqrt(a0 * a0 + b0 * b0)
-    n1 = np.sqrt(a1 * a1 + b1 * b1)
-    f = a0 * b1 - b0 * a1
-    inv_g = 1.0 / (n0 * n1 + a0 * a1 + b0 * b1)
-    kappa = 2.0 * f * inv_g
-    c = stiffness * (kappa - kappa_bar)
-    # d(kappa)/d(a0, b0, a1, b1) = 2 (f_e - f g_e / g) / g
-    s = 2.0 * c * inv_g
-    fg = f * inv_g
-    k0 = s * (b1 - fg * (n1 * a0 / n0 + a1))
-    k1 = s * (-a1 - fg * (n1 * b0 / n0 + b1))
-    k2 = s * (-b0 - fg * (n0 * a1 / n1 + a0))
-    k3 = s * (a0 - fg * (n0 * b1 / n1 + b0))
-    grad[0] = -k0
-    grad[1] = -k1
-    grad[2] = k0 - k2
-    grad[3] = k1 - k3
-    grad[4] = k2
-    grad[5] = k3
-    return 0.5 * c * (kappa - kappa_bar)
+    """`bending_terms` without the Hessian: writes d(E)/dx (6,), returns E (J)."""
+    jet = _turning_jet(x)
+    dev = jet[0] - kappa_bar
+    alpha = stiffness * dev * jet[1]  # dE/dphi
+    for i in range(6):
+        grad[i] = alpha * jet[3 + i]
+    return 0.5 * stiffness * dev * dev
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def spring_gradient(x, stiffness, rest_offset_x, rest_offset_z, grad):
     """`spring_terms` without the Hessian: writes d(E)/dx (4,), returns E (J)."""
     dx = x[0] - x[2] - rest_offset_x

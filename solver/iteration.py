@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from snapmorph.solver.assembly import assemble_dead_loads, assemble_gradient, assemble_system
+from snapmorph.solver.assembly import assemble_banded, assemble_dead_loads, assemble_gradient
 from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws
 from snapmorph.solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
 
@@ -128,13 +128,15 @@ def with_dead_loads(q, loads, grad, grad_full, energy):
 
 
 @njit(cache=True)
-def newton_iteration(q, lam, P, elements, dofs, loads, dof_map, band, heights, grad,
+def newton_iteration(q, lam, P, elements, dofs, slots, loads, dof_map, band, heights, grad,
                      grad_full, work, pivot_tol, tol_force):
-    """One Newton iteration at fixed load lam P (N). ``work`` is (n, 3) scratch.
+    """One Newton iteration at fixed load lam P (N) of planar rods (``band`` Fortran
+    order, ``slots``: `solver.assembly.band_slots`). ``work`` is (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, energy)."""
     energy = with_dead_loads(q, loads, grad, grad_full,
-                             assemble_system(q, elements, dofs, band, grad, grad_full))
+                             assemble_banded(q, elements, dofs, slots, dof_map, band, heights,
+                                             grad, grad_full))
     status, neg, r_max = newton_correction(lam, P, band, heights, grad, work, pivot_tol,
                                            tol_force)
     if status != 2:
@@ -144,14 +146,15 @@ def newton_iteration(q, lam, P, elements, dofs, loads, dof_map, band, heights, g
 
 
 @njit(cache=True)
-def mgdc_iteration(q, lam, P, uP1, elements, dofs, loads, dof_map, band, heights, grad,
-                   grad_full, work, pivot_tol, tol_force):
+def mgdc_iteration(q, lam, P, uP1, elements, dofs, slots, loads, dof_map, band, heights,
+                   grad, grad_full, work, pivot_tol, tol_force):
     """One MGDC corrector iteration: the load increment keeps the correction orthogonal to
     the step's first tangent ``uP1``. ``work`` is (n, 3) scratch.
 
     Returns (status, negative_eigenvalues, residual_max, du_max, dlam, energy)."""
     energy = with_dead_loads(q, loads, grad, grad_full,
-                             assemble_system(q, elements, dofs, band, grad, grad_full))
+                             assemble_banded(q, elements, dofs, slots, dof_map, band, heights,
+                                             grad, grad_full))
     status, neg, r_max, dl = mgdc_correction(lam, P, uP1, band, heights, grad, work,
                                              pivot_tol, tol_force)
     if status != 2:
@@ -211,12 +214,12 @@ def mgdc_iteration3d(q, lam, P, uP1, model, loads, dof_map, dof_scale, band, hei
 
 
 @njit(cache=True)
-def settle_state(q, lam, P, elements, dofs, loads, grad, grad_full, work):
+def settle_state(q, lam, P, elements, dof_map, loads, grad, grad_full, work):
     """The energy (J) and gradients (N) at a state ``q`` Newton has converged to on the
     displacements, without the stiffness (`solver.assembly.assemble_gradient`): K stays
     factorised at the iterate before. ``work`` (n, 3) scratch.
 
     Returns (residual_max, energy)."""
     energy = with_dead_loads(q, loads, grad, grad_full,
-                             assemble_gradient(q, elements, dofs, grad, grad_full))
+                             assemble_gradient(q, elements, dof_map, grad, grad_full))
     return _residual(grad, lam, P, work[:, 0]), energy

@@ -495,9 +495,9 @@ class Structure(ConstrainedStructure):
         system = ReducedSystem(self.elements(normalized), *ordering, loads=loads,
                                layout=layout)
         if layout[1] is None:  # the first system of this ordering: keep its layout
-            for a in (*system.dofs, system.heights):
+            for a in (*system.dofs, system.heights, *system.slots):
                 a.setflags(write=False)  # shared by every system of this ordering
-            layout[:] = [system.dofs, system.heights]
+            layout[:] = [system.dofs, system.heights, system.slots]
         system.force_unit = force_unit
         return system
 
@@ -507,8 +507,8 @@ class Structure(ConstrainedStructure):
         checks, and the copies of a structure (`copy`) that share its elements, reuse it
         (the key holds the supports, the extra held components, the exact ties and rigid
         groups, and the element tables it was built from). ``layout``: [element DOFs,
-        envelope heights] of the systems built from it, filled by the first (a list: [None,
-        None] until then)."""
+        envelope heights, band slots] of the systems built from it, filled by the first (a
+        list: [None, None, None] until then)."""
         key = (tuple(sorted((int(n), tuple(sorted(c))) for n, c in self._fixed.items())),
                tuple((int(n), int(c)) for n, c in (extra_fixed or ())),
                tuple(self._merges))
@@ -516,7 +516,7 @@ class Structure(ConstrainedStructure):
         if memo is None or memo[0] is not self._cache:  # built from other elements
             memo = self._orderings = (self._cache, {})
         if key not in memo[1]:
-            memo[1][key] = (self._build_ordering(extra_fixed, elements), [None, None])
+            memo[1][key] = (self._build_ordering(extra_fixed, elements), [None, None, None])
         return memo[1][key]
 
     def _build_ordering(self, extra_fixed, elements):

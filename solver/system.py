@@ -17,8 +17,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from snapmorph.solver.assembly import (assemble_dead_loads, assemble_system, element_dofs,
-                                       load_record, no_loads, stiff_second_difference)
+from snapmorph.solver.assembly import (assemble_banded, assemble_dead_loads, band_slots,
+                                       element_dofs, load_record, no_loads,
+                                       stiff_second_difference)
 from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws, element_dofs3d
 from snapmorph.solver.banded import (band_to_dense, envelope_heights, ldlt_factor_envelope,
                                      ldlt_solve_envelope)
@@ -285,24 +286,29 @@ class ReducedSystem(BandedSystem):
     (2 n_nodes + 2 n_ghosts,) full -> reduced DOF, ``loads`` dead loads (`BandedSystem`)."""
 
     def __init__(self, elements, dof_map, n_reduced, bandwidth, loads=None, layout=None):
-        """``layout``: (element DOFs, envelope heights) of these elements and ``dof_map``
-        when already known (`Structure.reduced_system` keeps them with the DOF ordering)."""
+        """``layout``: (element DOFs, envelope heights, band slots) of these elements and
+        ``dof_map`` when already known (`Structure.reduced_system` keeps them with the DOF
+        ordering)."""
         dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
         self.elements = elements
-        self.dofs, heights = (element_dofs(elements, dof_map), None) \
-            if layout is None or layout[0] is None else layout
+        known = layout is not None and layout[0] is not None
+        self.dofs, heights, slots = layout if known else (element_dofs(elements, dof_map), None,
+                                                          None)
         # Fortran order: the factor and the solves walk the band's columns (1.5x faster)
         super().__init__(dof_map, n_reduced, bandwidth, self.dofs, order="F", loads=loads,
                          heights=heights)
+        # where every element's Hessian goes in the band (`solver.assembly.band_slots`)
+        self.slots = band_slots(self.dofs, self.band.shape[0]) if slots is None else slots
         # the fused kernels, and their arguments after (q, lam, P[, uP1]) but the last
         self._newton_iteration, self._mgdc_iteration = newton_iteration, mgdc_iteration
-        self._kernel_args = (self.elements, self.dofs, self.loads, self.dof_map, self.band,
-                             self.heights, self.grad, self.grad_full, self._work, PIVOT_TOL)
+        self._kernel_args = (self.elements, self.dofs, self.slots, self.loads, self.dof_map,
+                             self.band, self.heights, self.grad, self.grad_full, self._work,
+                             PIVOT_TOL)
 
     def evaluate(self, q):
         """Assemble energy (J), gradients (N) and K (N/m) at positions ``q`` (m)."""
-        energy = assemble_system(q, self.elements, self.dofs, self.band, self.grad,
-                                 self.grad_full)
+        energy = assemble_banded(q, self.elements, self.dofs, self.slots, self.dof_map,
+                                 self.band, self.heights, self.grad, self.grad_full)
         self.energy = self._with_loads(q, energy)
         return self.energy
 
@@ -310,7 +316,7 @@ class ReducedSystem(BandedSystem):
         """`BandedSystem.settle` by the compiled gradient-only assembly."""
         if not self.factor_ok:
             return None
-        r_max, self.energy = settle_state(q, lam, P, self.elements, self.dofs, self.loads,
+        r_max, self.energy = settle_state(q, lam, P, self.elements, self.dof_map, self.loads,
                                           self.grad, self.grad_full, self._work)
         return r_max
 
