@@ -93,14 +93,30 @@ def band_slots(dofs, ld):
     Computed once per system, so that the assembly does no index arithmetic."""
     out = []
     for d in dofs:
-        d = np.asarray(d, dtype=np.int64)
-        a, b = np.tril_indices(d.shape[1])
-        ra, rb = d[:, a], d[:, b]
-        lo, hi = np.minimum(ra, rb), np.maximum(ra, rb)
-        twice = (ra == rb) & (a != b)[None, :]
-        slots = np.where((ra >= 0) & (rb >= 0), 2 * (lo * ld + hi - lo) + twice, -1)
-        out.append(np.ascontiguousarray(slots, dtype=np.int64))
+        d = np.ascontiguousarray(d, dtype=np.int64)
+        k = d.shape[1]
+        slots = np.empty((d.shape[0], k * (k + 1) // 2), dtype=np.int64)
+        _fill_slots(d, ld, slots)
+        out.append(slots)
     return tuple(out)
+
+
+@njit(cache=True)
+def _fill_slots(dofs, ld, slots):
+    """`band_slots` of one element array (a compiled loop: computed for every new DOF
+    ordering, several per unit)."""
+    for e in range(dofs.shape[0]):
+        p = 0
+        for a in range(dofs.shape[1]):
+            ra = dofs[e, a]
+            for b in range(a + 1):
+                rb = dofs[e, b]
+                if ra < 0 or rb < 0:
+                    slots[e, p] = -1
+                else:
+                    lo, hi = min(ra, rb), max(ra, rb)
+                    slots[e, p] = 2 * (lo * ld + hi - lo) + (1 if ra == rb and a != b else 0)
+                p += 1
 
 
 @njit(cache=True)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import copy
 
 import numpy as np
+from numba import njit
 
 from snapmorph.solver.displacement import follow_displacement
 from snapmorph.solver.equilibrium import equilibrium
@@ -46,16 +47,26 @@ def bandwidth(*element_dofs) -> int:
     """The half bandwidth of a matrix assembled from elements with these reduced DOF
     lists ((n_elements, k) int arrays, -1 for held DOFs): the largest spread of the free
     DOFs of one element."""
+    return max((_spread(np.ascontiguousarray(d, dtype=np.int64)) for d in element_dofs
+                if d.shape[0]), default=0)
+
+
+@njit(cache=True)
+def _spread(dofs):
+    """The largest spread max - min of the free (>= 0) entries of a row of ``dofs`` (a
+    compiled loop: every new DOF ordering asks, several per unit)."""
     out = 0
-    big = np.iinfo(np.int64).max
-    for d in element_dofs:
-        if d.shape[0] == 0:
-            continue
-        hi = np.max(d, axis=1)
-        lo = np.min(np.where(d < 0, big, d), axis=1)
-        free = hi >= 0
-        if free.any():
-            out = max(out, int(np.max(hi[free] - lo[free])))
+    for e in range(dofs.shape[0]):
+        lo, hi = -1, -1
+        for a in range(dofs.shape[1]):
+            r = dofs[e, a]
+            if r >= 0:
+                if lo < 0 or r < lo:
+                    lo = r
+                if r > hi:
+                    hi = r
+        if hi >= 0 and hi - lo > out:
+            out = hi - lo
     return out
 
 

@@ -24,7 +24,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from snapmorph.solver.assembly import assemble_banded, assemble_dead_loads, assemble_gradient
+from snapmorph.solver.assembly import (assemble_banded, assemble_dead_loads, assemble_gradient,
+                                       stiff_second_difference)
 from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3d_ws
 from snapmorph.solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
 
@@ -223,3 +224,44 @@ def settle_state(q, lam, P, elements, dof_map, loads, grad, grad_full, work):
     energy = with_dead_loads(q, loads, grad, grad_full,
                              assemble_gradient(q, elements, dof_map, grad, grad_full))
     return _residual(grad, lam, P, work[:, 0]), energy
+
+
+@njit(cache=True)
+def second_order_term(q, step, uP, elements, dofs, dof_map, band, heights, bend_fraction,
+                      out):
+    """The MGDC predictor's second-order term at the converged state ``q`` (planar rods, K
+    factorised there in ``band``): for the tangent step ``step`` = dlam u_P (reduced),
+    w = K^-1 (g(q + step) + g(q - step) - 2 g(q)) of the stiff terms
+    (`solver.assembly.stiff_second_difference`), and the term mu u_P - w / 2 into ``out``,
+    mu keeping it orthogonal to the step (`solver.mgdc._Mgdc._bend`). Returns (mu, True),
+    or (0, False) where the term is longer than ``bend_fraction`` of the step (the path
+    bends too sharply for it) or the step is degenerate. One call for what took eight
+    array operations a step."""
+    n = step.shape[0]
+    plus = q.copy()
+    minus = q.copy()
+    for j in range(q.shape[0]):
+        r = dof_map[j]
+        if r >= 0:
+            plus[j] += step[r]
+            minus[j] -= step[r]
+    w = np.empty((n, 1))
+    stiff_second_difference(q, plus, minus, elements, dofs, w[:, 0])
+    ldlt_solve_envelope(band, heights, w)
+    along = 0.0
+    sw = 0.0
+    for i in range(n):
+        along += step[i] * uP[i]
+        sw += step[i] * w[i, 0]
+    if along == 0.0:
+        return 0.0, False
+    mu = sw / (2.0 * along)
+    size = 0.0
+    length = 0.0
+    for i in range(n):
+        out[i] = mu * uP[i] - 0.5 * w[i, 0]
+        size += out[i] * out[i]
+        length += step[i] * step[i]
+    if not np.sqrt(size) <= bend_fraction * np.sqrt(length):
+        return 0.0, False
+    return mu, True

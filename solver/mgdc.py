@@ -291,21 +291,7 @@ class _Mgdc:
         every rotating edge by the square of its rotation, and the stretching answers with a
         residual some 10^3 times the force scale, which the corrector takes 4-5 iterations
         to remove; with this term, 3."""
-        system = self.system
-        step = dlam * uP1
-        second = system.stiff_second_difference(self.q, step)
-        if second is None:
-            return None
-        w = system.solve(second)
-        along = float(step @ uP1)
-        if along == 0.0:
-            return None
-        mu = float(step @ w) / (2.0 * along)
-        bend = mu * uP1 - 0.5 * w
-        size = float(np.linalg.norm(bend))
-        if not size <= BEND_FRACTION * float(np.linalg.norm(step)):
-            return None
-        return bend, mu
+        return self.system.second_order_term(self.q, dlam * uP1, uP1, BEND_FRACTION)
 
     def _crosses(self, uP, q_try):
         """Would the converged trial state q_try (tangent ``uP = K^-1 P`` there) put a

@@ -25,7 +25,7 @@ from snapmorph.solver.banded import (band_to_dense, envelope_heights, ldlt_facto
                                      ldlt_solve_envelope)
 from snapmorph.solver.frames3d import canonical_twist_offset, reference_twist, transport_frames
 from snapmorph.solver.iteration import (mgdc_iteration, mgdc_iteration3d, newton_iteration,
-                                        newton_iteration3d, settle_state)
+                                        newton_iteration3d, second_order_term, settle_state)
 from snapmorph.solver.sparse import SparseLDLT, system_factorisation
 
 # A pivot smaller than this times the largest diagonal entry means K is numerically singular
@@ -245,6 +245,24 @@ class BandedSystem:
         second-order predictor of `solver.mgdc`); None where the system does not give it."""
         return None
 
+    def second_order_term(self, q, step, uP, bend_fraction):
+        """(du (reduced), dlam) of the MGDC predictor's second-order term at the state ``q``
+        (K factorised there) for the tangent step ``step`` along ``uP``
+        (`solver.mgdc._Mgdc._bend`), None where the term is not small or the system does not
+        give it (then the predictor is the tangent alone)."""
+        second = self.stiff_second_difference(q, step)
+        if second is None:
+            return None
+        w = self.solve(second)
+        along = float(step @ uP)
+        if along == 0.0:
+            return None
+        mu = float(step @ w) / (2.0 * along)
+        bend = mu * uP - 0.5 * w
+        if not float(np.linalg.norm(bend)) <= bend_fraction * float(np.linalg.norm(step)):
+            return None
+        return bend, mu
+
     def accept(self, q):
         """Hook called by the path followers after every accepted state (and after a
         reroute): nothing to carry along here (3-D rods update their frames)."""
@@ -319,6 +337,18 @@ class ReducedSystem(BandedSystem):
         r_max, self.energy = settle_state(q, lam, P, self.elements, self.dof_map, self.loads,
                                           self.grad, self.grad_full, self._work)
         return r_max
+
+    def second_order_term(self, q, step, uP, bend_fraction):
+        """`BandedSystem.second_order_term` in one compiled call
+        (`solver.iteration.second_order_term`) where K's factor is the band's own."""
+        if self._dense_lu is not None or self._sparse_solves or self._splu is not None:
+            return super().second_order_term(q, step, uP, bend_fraction)
+        out = np.empty(self.n)
+        mu, ok = second_order_term(q, np.ascontiguousarray(step, dtype=float),
+                                   np.ascontiguousarray(uP, dtype=float), self.elements,
+                                   self.dofs, self.dof_map, self.band, self.heights,
+                                   float(bend_fraction), out)
+        return (out, mu) if ok else None
 
     def stiff_second_difference(self, q, du):
         """g(q + du) + g(q - du) - 2 g(q) of the stretching and bond-spring terms of the
