@@ -265,3 +265,80 @@ def second_order_term(q, step, uP, elements, dofs, dof_map, band, heights, bend_
     if not np.sqrt(size) <= bend_fraction * np.sqrt(length):
         return 0.0, False
     return mu, True
+
+
+# ---------------------------------------------------------------------------- corrector loops
+# The drivers' loops over the fused iterations above (`solver.newton.newton`,
+# `solver.mgdc._Mgdc._correct`), compiled for planar rods: the same iterations and tests in
+# the same order (same bits), without the Python between them. They stop where the Python
+# loop has work of its own: convergence, or an iteration the fused kernel cannot do (status
+# 1: the general path with its dense fallback takes over at that iteration).
+
+@njit(cache=True, inline="always")
+def settled_rule(du_max, du_prev, tol_disp, settle_factor):
+    """`solver.newton.settled` (compiled)."""
+    return du_max <= tol_disp or (du_max <= settle_factor * tol_disp
+                                  and du_max * du_max <= tol_disp * du_prev)
+
+
+@njit(cache=True)
+def newton_loop(q, lam, P, tol_force, tol_disp, max_iter, max_move, settle, elements, dofs,
+                slots, loads, dof_map, band, heights, grad, grad_full, work, pivot_tol):
+    """`newton_iteration` from iteration 0 while it succeeds. Returns (status, it,
+    du_max, negative_eigenvalues, energy): 0 converged at ``it`` (K factorised at q, or one
+    iterate back when settled: ``settle`` and the last correction below ``tol_disp``,
+    gradients and energy at q by `settle_state`); 1 iteration ``it`` is the general path's
+    (the fused one failed and changed nothing, or its correction was longer than
+    ``max_move`` and is undone, or ``it`` is the last, which the general path checks)."""
+    du_max = np.inf
+    neg = 0
+    energy = 0.0
+    for it in range(max_iter):
+        if settle and du_max <= tol_disp:
+            _, energy = settle_state(q, lam, P, elements, dof_map, loads, grad, grad_full,
+                                     work)
+            return 0, it, du_max, neg, energy
+        status, neg, r_max, du_step, energy = newton_iteration(
+            q, lam, P, elements, dofs, slots, loads, dof_map, band, heights, grad, grad_full,
+            work, pivot_tol, tol_force if du_max > tol_disp else np.inf)
+        if status == 0:
+            return 0, it, du_max, neg, energy
+        if status == 2 and du_step <= max_move:
+            du_max = du_step
+            continue
+        if status == 2:  # undo the too-long step: the general path damps it
+            for j in range(q.shape[0]):
+                r = dof_map[j]
+                if r >= 0:
+                    q[j] -= work[r, 1]
+        return 1, it, du_max, neg, energy
+    return 1, max_iter, du_max, neg, energy
+
+
+@njit(cache=True)
+def mgdc_loop(q, lam, P, uP1, tol_force, tol_disp, max_iter, settle_factor, elements, dofs,
+              slots, loads, dof_map, band, heights, grad, grad_full, work, pivot_tol):
+    """`mgdc_iteration` from iteration 1 while it succeeds. Returns (status, it, lam,
+    du_max, du_prev, r_max, done, iterations, negative_eigenvalues, energy): 0 converged at
+    ``it`` (``done``: on the displacements, `settled_rule`); 1 the fused iteration ``it``
+    failed (nothing changed: the general path's); 3 no convergence in ``max_iter``;
+    ``iterations``: the corrections applied."""
+    du_max = np.inf
+    du_prev = np.inf
+    iterations = 0
+    neg = 0
+    energy = 0.0
+    for it in range(1, max_iter + 1):
+        done = settled_rule(du_max, du_prev, tol_disp, settle_factor)
+        status, neg, r_max, du_step, dl, energy = mgdc_iteration(
+            q, lam, P, uP1, elements, dofs, slots, loads, dof_map, band, heights, grad,
+            grad_full, work, pivot_tol, np.inf if done else tol_force)
+        if status == 0:
+            return 0, it, lam, du_max, du_prev, r_max, done, iterations, neg, energy
+        if status != 2:
+            return 1, it, lam, du_max, du_prev, r_max, done, iterations, neg, energy
+        du_prev = du_max
+        du_max = du_step
+        lam += dl
+        iterations += 1
+    return 3, max_iter, lam, du_max, du_prev, 0.0, False, iterations, neg, energy

@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 from snapmorph.solver.branching import BranchMonitor, PathState
-from snapmorph.solver.newton import TOL_DISP, counted, newton, settled
+from snapmorph.solver.newton import SETTLE_FACTOR, TOL_DISP, counted, newton, settled
 from snapmorph.solver.path import Recorder
 from snapmorph.solver.problem import check_options, driver_system, load_unit, load_vector
 from snapmorph.solver.stability import held_count
@@ -241,10 +241,22 @@ class _Mgdc:
                 lam_try += bend[1]
         tol_force = self.tol * max(self.fscale, abs(lam_try) * self.unit)
         du_max = du_prev = np.inf
-        for it in range(1, self.max_iter + 1):
+        start = 1
+        looped = system.mgdc_loop(q_try, lam_try, P, uP1, tol_force, tol_disp, self.max_iter,
+                                  SETTLE_FACTOR)
+        if looped is not None:  # the fused iterations in one call (planar rods)
+            status, start, lam_try, du_max, du_prev, r_max, done, iterations = looped
+            self.total_iterations += iterations
+            if status == 0:
+                return q_try, lam_try, counted(start, done, du_max, tol_disp, r_max,
+                                               tol_force), True
+            if status == 3:
+                return q_try, lam_try, start, False
+        for it in range(start, self.max_iter + 1):
             done = settled(du_max, du_prev, tol_disp)
-            fstat, r_max, du_step, dl = system.fused_mgdc(
-                q_try, lam_try, P, uP1, np.inf if done else tol_force)
+            fstat, r_max, du_step, dl = (1, 0.0, 0.0, 0.0) if looped is not None \
+                and it == start else system.fused_mgdc(q_try, lam_try, P, uP1,
+                                                       np.inf if done else tol_force)
             if fstat == 0:
                 return q_try, lam_try, counted(it, done, du_max, tol_disp, r_max,
                                                tol_force), True

@@ -45,8 +45,15 @@ def newton(system, q, lam, P, tol_force, tol_disp, max_iter, max_move, fused=Tru
     du_max = np.inf
     if P is None:
         P = np.zeros(system.n)
-    for it in range(max_iter + 1):
-        if fused and it < max_iter:
+    start = 0
+    looped = system.newton_loop(q, lam, P, tol_force, tol_disp, max_iter, max_move,
+                                settle) if fused else None
+    if looped is not None:  # the fused iterations in one call (planar rods)
+        status, start, du_max = looped
+        if status == 0:
+            return start
+    for it in range(start, max_iter + 1):
+        if fused and it < max_iter and (looped is None or it > start):
             if settle and du_max <= tol_disp and system.settle(q, lam, P) is not None:
                 return it  # converged on the displacements: K stays factorised one step back
             fstat, r_max, du_step = system.fused_newton(

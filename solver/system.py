@@ -25,7 +25,8 @@ from snapmorph.solver.banded import (band_to_dense, envelope_heights, ldlt_facto
                                      ldlt_solve_envelope)
 from snapmorph.solver.frames3d import canonical_twist_offset, reference_twist, transport_frames
 from snapmorph.solver.iteration import (mgdc_iteration, mgdc_iteration3d, newton_iteration,
-                                        newton_iteration3d, second_order_term, settle_state)
+                                        newton_iteration3d, newton_loop, second_order_term,
+                                        settle_state, mgdc_loop)
 from snapmorph.solver.sparse import SparseLDLT, system_factorisation
 
 # A pivot smaller than this times the largest diagonal entry means K is numerically singular
@@ -225,6 +226,19 @@ class BandedSystem:
         entry, or None where this system cannot (then a full iteration confirms q)."""
         return None
 
+    def newton_loop(self, q, lam, P, tol_force, tol_disp, max_iter, max_move, settle):
+        """The fused Newton iterations of `solver.newton.newton` in one compiled call, or
+        None where the system has none (the caller loops over `fused_newton`). Returns
+        (status, it, du_max): 0 converged at iteration ``it``; 1 iteration ``it`` is the
+        general path's (see `solver.iteration.newton_loop`)."""
+        return None
+
+    def mgdc_loop(self, q, lam, P, uP1, tol_force, tol_disp, max_iter, settle_factor):
+        """The fused corrector iterations of `solver.mgdc` in one compiled call, or None
+        (the caller loops over `fused_mgdc`). Returns (status, it, lam, du_max, du_prev,
+        r_max, done, iterations) (`solver.iteration.mgdc_loop`)."""
+        return None
+
     @property
     def last_correction(self):
         """The reduced increment applied by the last `fused_newton` call that updated q."""
@@ -329,6 +343,27 @@ class ReducedSystem(BandedSystem):
                                  self.band, self.heights, self.grad, self.grad_full)
         self.energy = self._with_loads(q, energy)
         return self.energy
+
+    def newton_loop(self, q, lam, P, tol_force, tol_disp, max_iter, max_move, settle):
+        """`BandedSystem.newton_loop` compiled (`solver.iteration.newton_loop`)."""
+        if self.factorisation == "sparse":
+            return None
+        status, it, du_max, neg, energy = newton_loop(
+            q, lam, P, tol_force, tol_disp, max_iter, max_move, settle, *self._kernel_args)
+        if it > 0 or status == 0:  # a fused iteration ran: its factor and counts stand
+            self._after_fused(0, neg, energy)
+        return status, it, du_max
+
+    def mgdc_loop(self, q, lam, P, uP1, tol_force, tol_disp, max_iter, settle_factor):
+        """`BandedSystem.mgdc_loop` compiled (`solver.iteration.mgdc_loop`)."""
+        if self.factorisation == "sparse":
+            return None
+        (status, it, lam, du_max, du_prev, r_max, done, iterations, neg,
+         energy) = mgdc_loop(q, lam, P, uP1, tol_force, tol_disp, max_iter, settle_factor,
+                             *self._kernel_args)
+        if status != 1 or it > 1:
+            self._after_fused(0 if status != 1 else 2, neg, energy)
+        return status, it, lam, du_max, du_prev, r_max, done, iterations
 
     def settle(self, q, lam, P):
         """`BandedSystem.settle` by the compiled gradient-only assembly."""

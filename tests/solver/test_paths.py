@@ -525,3 +525,34 @@ def test_displacement_control_keeps_no_step_that_breaks_the_energy_balance(h_ove
              if c.kind == "limit" and c.control == "displacement" and c.d > 1.5 * h]
     fold = max(folds, key=lambda c: c.d)  # where the stable branch ends in d
     assert abs(dc.force.min() / fold.F - 1) < 0.01, (dc.force.min() / unit, fold.F / unit)
+
+
+def test_compiled_corrector_loops_give_the_python_loops_bits():
+    """`System.newton_loop` and `System.mgdc_loop` (the fused iterations in one compiled
+    call, planar rods) against the drivers' own Python loops over `fused_newton` and
+    `fused_mgdc` (the systems' loops switched off): the same path, force and states, bit
+    for bit, through a limit point and a snap, and the same displacement-controlled solves."""
+    from snapmorph.solver.states import DisplacementProbe
+    from snapmorph.solver.system import BandedSystem, ReducedSystem
+
+    def run():
+        st, mid, h, _ = arch(20, 101, "fix")
+        path = st.push(mid, (0.0, -1.0), 2.2 * h, method="mgdc")
+        probe = DisplacementProbe(st, mid)
+        k = int(np.argmax(path.force))
+        solved = probe.solve(path.positions[k], path.displacement[k] + 1e-4 * h)
+        return path, solved
+
+    compiled = run()
+    saved = ReducedSystem.newton_loop, ReducedSystem.mgdc_loop
+    ReducedSystem.newton_loop = BandedSystem.newton_loop
+    ReducedSystem.mgdc_loop = BandedSystem.mgdc_loop
+    try:
+        python = run()
+    finally:
+        ReducedSystem.newton_loop, ReducedSystem.mgdc_loop = saved
+    (a, sa), (b, sb) = compiled, python
+    assert a.status == b.status == "ok" and len(a) == len(b)
+    assert np.array_equal(a.force, b.force) and np.array_equal(a.positions, b.positions)
+    assert np.array_equal(a.iterations, b.iterations)
+    assert np.array_equal(sa[0], sb[0]) and sa[1] == sb[1]
