@@ -102,8 +102,9 @@ class Recorder:
     """Collects the converged states of a path (through the structure's interface only).
     Forces and energies come in the driver system's units and are kept in N and J
     (``force_unit``: see `solver.problem.driver_system`). ``rates``: keep each state's
-    dq/dd (the ``rate`` of `add`: a full state vector, None where unknown) as the path's
-    ``rates``."""
+    dq/dd as the path's ``rates`` (the ``rate`` of `add`: (u, c), dq/dd = c W u for a
+    reduced vector u of the system, None where unknown; mapped to positions once, when the
+    path is made)."""
 
     def __init__(self, structure, force_unit, system, rates=False):
         self.structure = structure
@@ -125,8 +126,7 @@ class Recorder:
         for k, v in zip(self.rows, (d, F, pos, E, it, neg, negd)):
             self.rows[k].append(v)
         if self.rates is not None:
-            self.rates.append(np.full(pos.shape, np.nan) if rate is None else
-                              np.array(st.positions_of(rate), dtype=float, copy=True))
+            self.rates.append(rate)
         if not self._fielded:
             return
         fields = dict(st.state_fields(q))
@@ -159,6 +159,22 @@ class Recorder:
             info=info,
             critical_points=list(critical_points),
             fields={k: np.array(v) for k, v in self.fields.items()},
-            rates=None if self.rates is None else
-            np.array(self.rates, dtype=float).reshape(-1, st.n_nodes, int(st.dim)),
+            rates=self._rates(),
         )
+
+    def _rates(self):
+        """(K, n_nodes, dim) dq/dd of the states kept by `add` (NaN rows where unknown)."""
+        if self.rates is None:
+            return None
+        st, system = self.structure, self.system
+        known = [k for k, r in enumerate(self.rates) if r is not None]
+        full = np.full((len(self.rates), system.dof_map.shape[0]), np.nan)
+        if known:
+            u = np.array([self.rates[k][0] for k in known], dtype=float)
+            c = np.array([self.rates[k][1] for k in known], dtype=float)
+            free = system.dof_map >= 0
+            rows = np.zeros((len(known), full.shape[1]))
+            rows[:, free] = u[:, system.dof_map[free]] * (c[:, None] * system.dof_scale[free])
+            full[known] = rows
+        dim = int(st.dim)
+        return np.ascontiguousarray(full[:, :dim * st.n_nodes]).reshape(-1, st.n_nodes, dim)

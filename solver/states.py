@@ -101,6 +101,8 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None, rates=None):
     samples = [np.asarray(positions[j], dtype=float) for j in range(i - 1, i + 2)]
     slopes = None if rates is None else [np.asarray(rates[j], dtype=float)
                                           for j in range(i - 1, i + 2)]
+    if slopes is not None:  # a row not known (NaN) is None: `between` goes without it
+        slopes = [r if np.all(np.isfinite(r)) else None for r in slopes]
 
     solved = {}  # d -> the solve's positions, when they are of the samples' kind
 
@@ -220,7 +222,7 @@ def _polynomial_maximum(pts, lo, hi):
             return None
         q = -0.5 * (B + np.copysign(np.sqrt(disc), B))
         roots = [q / A] + ([C / q] if q != 0.0 else [])
-    top = (pts[int(np.argmax(y))][0] - x0) / scale
+    top = (pts[max(range(len(y)), key=y.__getitem__)][0] - x0) / scale
     maxima = [r for r in roots if 2.0 * A * r + B < 0.0 and lo < x0 + r * scale < hi]
     if not maxima:
         return None
@@ -245,9 +247,9 @@ def between(ds, values, slopes, x):
 def hermite(d0, d1, q0, q1, r0, r1, x):
     """The cubic Hermite interpolant at ``x`` of a state known at d0 and d1 (q0, q1) with
     its slopes dq/dd there (r0, r1): off by O((d1 - d0)^4) on a smooth branch; None where a
-    slope is not finite (or d0 = d1)."""
+    slope is None or not finite (or d0 = d1)."""
     h = float(d1) - float(d0)
-    if h == 0.0 or not (np.all(np.isfinite(r0)) and np.all(np.isfinite(r1))):
+    if h == 0.0 or r0 is None or r1 is None or not np.isfinite(np.sum(r0) + np.sum(r1)):
         return None
     t = (float(x) - float(d0)) / h
     h00, h01 = (1.0 + 2.0 * t) * (1.0 - t) ** 2, t * t * (3.0 - 2.0 * t)

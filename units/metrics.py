@@ -190,13 +190,15 @@ def apex_stiffness(structure, state, node, direction=UP, system=None) -> float:
 
 
 # ---------------------------------------------------------------------------- snap-back
-def snap_back(model, released, distance, steps=60, deadline_options=None, failures=()):
+def snap_back(model, released, distance, steps=60, push_options=None, failures=()):
     """The snap-back load of a released unit: its base on the rollers (``model``: the unit
     built without the actuator, rollers on, its base middle held in x), state (iii)
     ``released`` (positions, actuator and supports removed) placed on the rollers, the apex
     pushed up (+z) by MGDC over ``distance`` (m) until F has passed its first maximum.
-    Returns (F_back N, d at it m, stiffness N/m at the start, the path); F_back NaN when F
-    has no maximum on the push (a failure of the path included)."""
+    ``push_options``: more options of the push (`solver.mgdc.follow_mgdc`: the predictor,
+    the path's tolerance, a time limit). Returns (F_back N, d at it m, stiffness N/m at the
+    start, the path); F_back NaN when F has no maximum on the push (a failure of the path
+    included)."""
     from snapmorph.units.push_through import first_peak, refine_peak
     from snapmorph.solver.states import DisplacementProbe
 
@@ -208,7 +210,7 @@ def snap_back(model, released, distance, steps=60, deadline_options=None, failur
     def past_peak(rows):
         return first_peak(rows["F"]) is not None
 
-    options = dict(deadline_options or {})
+    options = dict(push_options or {})
     path = st.push(model.apex, UP, _reach(st, start, model.apex, distance), start=start,
                    steps=steps, stop=past_peak, critical=False, **options)
     d, F = np.asarray(path.displacement), np.asarray(path.force)

@@ -671,6 +671,9 @@ def _snap_back(result, g, model, released, steps, deadline):
     snap_back`): the unit without its actuator on the rollers, its base middle held in x."""
     back = model.variant(actuator=False)
     back.structure.fix(back.base_mid, "x")
+    # (the tangent predictor at the drivers' tolerance: with the main push's second-order
+    # predictor and looser tolerance the push takes 8 % fewer iterations, but its samples
+    # change, and where d turns back at the force peak the peak search depends on them)
     options = {} if deadline is None else {"time_limit": max(deadline - time.perf_counter(),
                                                              1e-3)}
     try:
