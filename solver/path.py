@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 
 @dataclass(repr=False)
@@ -167,14 +168,18 @@ class Recorder:
         if self.rates is None:
             return None
         st, system = self.structure, self.system
-        known = [k for k, r in enumerate(self.rates) if r is not None]
-        full = np.full((len(self.rates), system.dof_map.shape[0]), np.nan)
-        if known:
-            u = np.array([self.rates[k][0] for k in known], dtype=float)
-            c = np.array([self.rates[k][1] for k in known], dtype=float)
-            free = system.dof_map >= 0
-            rows = np.zeros((len(known), full.shape[1]))
-            rows[:, free] = u[:, system.dof_map[free]] * (c[:, None] * system.dof_scale[free])
-            full[known] = rows
         dim = int(st.dim)
-        return np.ascontiguousarray(full[:, :dim * st.n_nodes]).reshape(-1, st.n_nodes, dim)
+        out = np.full((len(self.rates), dim * st.n_nodes), np.nan)
+        for k, rate in enumerate(self.rates):
+            if rate is not None:
+                _expand(rate[0], rate[1], system.dof_map, system.dof_scale, out[k])
+        return out.reshape(-1, st.n_nodes, dim)
+
+
+@njit(cache=True)
+def _expand(u, scale, dof_map, dof_scale, out):
+    """out[j] = scale dof_scale[j] u[dof_map[j]] (0 where held) for the first len(out) full
+    DOFs: a reduced vector as node components (W u)."""
+    for j in range(out.shape[0]):
+        r = dof_map[j]
+        out[j] = scale * dof_scale[j] * u[r] if r >= 0 else 0.0

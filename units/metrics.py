@@ -47,25 +47,34 @@ def surface_strain(P, X, t):
 
 @njit(cache=True)
 def _surface_strain(P, X, t_node, out):
-    """`surface_strain` of K states ``P`` (K, n, 2) into ``out`` (K, n); ``t_node`` (n,) m."""
+    """`surface_strain` of K states ``P`` (K, n, 2) into ``out`` (K, n); ``t_node`` (n,) m.
+    The stress-free lengths and curvatures are computed once for all the states."""
     n = X.shape[0]
-    here, made = np.empty(6), np.empty(6)  # a node's three positions (the curvature kernel's)
+    rest = np.empty(max(n - 1, 0))
+    for i in range(n - 1):
+        rest[i] = _length(X, i)
+    here = np.empty(6)  # a node's three positions (the curvature kernel's)
+    made = np.empty(n)  # kappa_bar t / 2 / voronoi length at each interior node
+    scale = np.empty(n)
+    for i in range(1, n - 1):
+        for a in range(3):
+            for c in range(2):
+                here[2 * a + c] = X[i - 1 + a, c]
+        made[i] = turning_curvature(here)
+        scale[i] = 0.5 * t_node[i] / (0.5 * (rest[i - 1] + rest[i]))
     for k in range(P.shape[0]):
         eps_prev = 0.0
         for i in range(n - 1):
             ex, ez = P[k, i + 1, 0] - P[k, i, 0], P[k, i + 1, 1] - P[k, i, 1]
-            rest = _length(X, i)
-            eps = np.sqrt(ex * ex + ez * ez) / rest - 1.0
+            eps = np.sqrt(ex * ex + ez * ez) / rest[i] - 1.0
             if i == 0:
                 out[k, 0] = abs(eps)
             else:
                 for a in range(3):
                     for c in range(2):
                         here[2 * a + c] = P[k, i - 1 + a, c]
-                        made[2 * a + c] = X[i - 1 + a, c]
-                voronoi = 0.5 * (_length(X, i - 1) + rest)
-                dkappa = turning_curvature(here) - turning_curvature(made)
-                out[k, i] = abs(0.5 * (eps_prev + eps)) + abs(dkappa) / voronoi * (0.5 * t_node[i])
+                dkappa = turning_curvature(here) - made[i]
+                out[k, i] = abs(0.5 * (eps_prev + eps)) + abs(dkappa) * scale[i]
             eps_prev = eps
         out[k, n - 1] = abs(eps_prev)
 

@@ -81,6 +81,7 @@ class PushModel(Protocol):
 # ---------------------------------------------------------------------------- the samples
 def first_peak(F):
     """Index of the first local maximum of F with F > 0 (None if there is none)."""
+    F = F.tolist() if isinstance(F, np.ndarray) else F  # (a loop over floats, not scalars)
     for i in range(1, len(F) - 1):
         if F[i] > 0 and F[i] >= F[i - 1] and F[i] > F[i + 1]:
             return i
