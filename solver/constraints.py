@@ -413,6 +413,13 @@ class ConstrainedStructure:
         node = int(node)
         return self.dim * node + np.arange(self.dim, dtype=np.int64)
 
+    def nodes_dofs(self, nodes) -> np.ndarray:
+        """(len(nodes), dim) int64: `node_dofs` of each of ``nodes`` (an int array), at once
+        (`solver.problem.make_control` asks it for the nodes sharing a pushed node's
+        displacement; a subclass that numbers its state otherwise overrides both)."""
+        nodes = np.asarray(nodes, dtype=np.int64)
+        return self.dim * nodes[:, None] + np.arange(self.dim, dtype=np.int64)
+
     def positions_of(self, q) -> np.ndarray:
         """(n_nodes, dim) node positions (m) held in the state vector ``q`` (a view)."""
         return np.asarray(q)[: self.dim * self.n_nodes].reshape(-1, self.dim)

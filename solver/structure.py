@@ -229,7 +229,9 @@ class Structure(ConstrainedStructure):
         """The stress-free full state vector q0 (2 n_nodes + 2 n_ghosts,) m: node positions,
         then the clamps' ghost nodes (see `clamp`); a fresh copy every call."""
         X = self.reference_positions
-        return np.concatenate([X, self._ghost_positions(X)]).reshape(-1).copy()
+        if not self._clamps:  # (the positions alone: one copy, no joining)
+            return X.reshape(-1).copy()
+        return np.concatenate([X, self._ghost_positions(X)]).reshape(-1)
 
     def state_fields(self, q) -> dict:
         """Per-state arrays recorded on a path besides positions: none for planar rods."""
