@@ -228,14 +228,15 @@ class ConstrainedStructure:
         variants of one mesh (a unit with and without its actuator and rig) cost no second
         meshing. Adding rods, clamps or springs to either leaves the other as it was."""
         other = copy.copy(self)
-        for name, value in vars(self).items():
+        state = vars(other)
+        for name, value in state.items():
             if isinstance(value, dict):
-                value = {k: (set(v) if isinstance(v, set) else v) for k, v in value.items()}
-            elif isinstance(value, (list, set)):
-                value = type(value)(list(v) if isinstance(v, list) else v for v in value)
-            else:
-                continue
-            setattr(other, name, value)
+                state[name] = {k: (set(v) if isinstance(v, set) else v) for k, v in value.items()}
+            elif isinstance(value, list):
+                items = [list(v) if isinstance(v, list) else v for v in value]
+                state[name] = items if type(value) is list else type(value)(items)
+            elif isinstance(value, set):
+                state[name] = type(value)(value)
         other._supernodes_memo = None
         return other
 

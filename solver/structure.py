@@ -76,14 +76,25 @@ def _real(value, name, what):
     return arr.astype(float)
 
 
+def _columns(*columns) -> np.ndarray:
+    """``np.stack(columns, axis=1)`` of 1-D arrays of one dtype, without its generality
+    (3 us a call, a dozen calls per rod)."""
+    out = np.empty((len(columns[0]), len(columns)), dtype=columns[0].dtype)
+    for j, c in enumerate(columns):
+        out[:, j] = c
+    return out
+
+
 def _per_edge(value, n_edges, name):
     """Section data per half edge, (n_edges, 2): a scalar, one value per edge, or one per
     half edge (the section may change at an edge's midpoint)."""
+    if type(value) is float and 0.0 < value < np.inf:  # (a valid scalar: no checks to repeat)
+        return np.full((n_edges, 2), value)
     arr = _real(value, name, "a positive number in m (or one per edge)")
     if arr.ndim == 0:
         arr = np.full(n_edges, float(arr))
     if arr.shape == (n_edges,):
-        arr = np.stack([arr, arr], axis=1)
+        arr = _columns(arr, arr)
     if arr.shape != (n_edges, 2):
         raise ValueError(
             f"{name} must be a scalar, one value per edge, shape ({n_edges},), or one per "
@@ -144,15 +155,17 @@ class Structure(ConstrainedStructure):
                              f"got {n}")
         if not np.all(np.isfinite(xz)):
             raise ValueError("xz contains NaN or infinite coordinates")
-        edges = np.diff(xz, axis=0)
+        edges = xz[1:] - xz[:-1]
         lengths = np.hypot(edges[:, 0], edges[:, 1])
-        scale = max(np.ptp(xz[:, 0]), np.ptp(xz[:, 1]), 1e-300)
+        extent = xz.max(axis=0) - xz.min(axis=0)
+        scale = max(extent[0], extent[1], 1e-300)
         if np.any(lengths <= 1e-9 * scale):
             i = int(np.argmin(lengths))
             raise ValueError(f"xz has coincident consecutive nodes (edge {i} has zero length)")
         # a rod that turns back on itself (consecutive edges anti-parallel): its turning
         # curvature 2 tan(phi / 2) is infinite
-        cosines = np.sum(edges[:-1] * edges[1:], axis=1) / (lengths[:-1] * lengths[1:])
+        dots = edges[:-1] * edges[1:]
+        cosines = (dots[:, 0] + dots[:, 1]) / (lengths[:-1] * lengths[1:])
         if np.any(cosines <= -1.0 + 1e-6):
             i = int(np.argmin(cosines))
             raise ValueError(f"xz turns back on itself at node {i + 1} (edges {i} and {i + 1} "
@@ -181,10 +194,10 @@ class Structure(ConstrainedStructure):
 
         free = Rod(nodes=nodes, width=width, thickness=thickness, E=E_REF)  # see E_REF
         self._rod_E.append(E)
-        self._stretch_free.append(np.stack([free.EA, lengths], axis=1))
+        self._stretch_free.append(_columns(free.EA, lengths))
         EA = rod.EA
-        self._stretch_nodes.append(np.stack([nodes[:-1], nodes[1:]], axis=1))
-        self._stretch_params.append(np.stack([EA, lengths], axis=1))
+        self._stretch_nodes.append(_columns(nodes[:-1], nodes[1:]))
+        self._stretch_params.append(_columns(EA, lengths))
 
         EI = rod.EI
         # Node stiffness EI / l_bar over the Voronoi region (half of each adjacent edge). Where
@@ -193,12 +206,12 @@ class Structure(ConstrainedStructure):
         # An arithmetic mean of EI there would make every result converge only as O(1/N).
         node_stiffness = 1.0 / (0.5 * lengths[:-1] / EI[:-1, 1] + 0.5 * lengths[1:] / EI[1:, 0])
         kappa_bar = _turning_curvatures(xz)
-        self._bend_nodes.append(np.stack([nodes[:-2], nodes[1:-1], nodes[2:]], axis=1))
-        self._bend_params.append(np.stack([node_stiffness, kappa_bar], axis=1))
+        self._bend_nodes.append(_columns(nodes[:-2], nodes[1:-1], nodes[2:]))
+        self._bend_params.append(_columns(node_stiffness, kappa_bar))
         EI_free = free.EI
-        self._bend_free.append(np.stack([
+        self._bend_free.append(_columns(
             1.0 / (0.5 * lengths[:-1] / EI_free[:-1, 1] + 0.5 * lengths[1:] / EI_free[1:, 0]),
-            kappa_bar], axis=1))
+            kappa_bar))
         self._cache = None
         return rod
 
@@ -381,6 +394,22 @@ class Structure(ConstrainedStructure):
         (as the unit does): an offset bond resists rigid rotation of the structure."""
         super().tie(node_a, node_b, method, stiffness)
 
+    def tie_all(self, pairs, method="exact", stiffness=None):
+        """`tie` every pair (node_a, node_b) of ``pairs`` (a sequence, or an (n, 2) int
+        array: a mesh's bonds). Exact ties given as an int array of valid, distinct nodes
+        are checked at once (`tie` checks each pair: 3 us a bond); anything else goes
+        through `tie`, with its errors."""
+        n = self.n_nodes
+        if (method == "exact" and isinstance(pairs, np.ndarray) and pairs.ndim == 2
+                and pairs.shape[1] == 2 and pairs.shape[0] and pairs.dtype.kind in "iu"
+                and n and pairs.min() >= 0 and pairs.max() < n
+                and not np.any(pairs[:, 0] == pairs[:, 1])):
+            self._merges.extend(map(tuple, pairs.tolist()))
+            self._constraints_changed()
+            return
+        for a, b in pairs:
+            self.tie(a, b, method, stiffness)
+
     def _tie_other(self, a, b, method, stiffness):
         if method != "spring":
             raise ValueError(f"tie method must be 'exact' or 'spring'; got {method!r}")
@@ -439,9 +468,9 @@ class Structure(ConstrainedStructure):
         if normalized:
             # section factors computed with E_REF, times E / E_max (exactly 1 for a single
             # material, so these arrays do not depend on E at all)
-            stretch_p = cat([np.stack([f[:, 0] * (E / E_max), f[:, 1]], 1)
+            stretch_p = cat([_columns(f[:, 0] * (E / E_max), f[:, 1])
                              for f, E in zip(self._stretch_free, self._rod_E)], (0, 2), float)
-            bend_p = cat([np.stack([f[:, 0] * (E / E_max), f[:, 1]], 1)
+            bend_p = cat([_columns(f[:, 0] * (E / E_max), f[:, 1])
                           for f, E in zip(self._bend_free, self._rod_E)], (0, 2), float)
             springs_p = springs_p.copy()
             springs_p[:, 0] *= E_REF / E_max
@@ -635,7 +664,8 @@ def _turning_curvatures(xz):
     e0 = xz[1:-1] - xz[:-2]
     e1 = xz[2:] - xz[1:-1]
     cross = e0[:, 0] * e1[:, 1] - e0[:, 1] * e1[:, 0]
-    g = np.hypot(e0[:, 0], e0[:, 1]) * np.hypot(e1[:, 0], e1[:, 1]) + np.sum(e0 * e1, axis=1)
+    dots = e0 * e1  # (the sum of two columns as np.sum(axis=1) adds them)
+    g = np.hypot(e0[:, 0], e0[:, 1]) * np.hypot(e1[:, 0], e1[:, 1]) + (dots[:, 0] + dots[:, 1])
     return 2.0 * cross / g
 
 

@@ -170,3 +170,45 @@ def test_state_from_copies_and_checks_what_it_is_given():
     q0[:] = 0.0
     assert np.array_equal(st.initial_state(), X.reshape(-1))  # a fresh copy every call
 
+
+def test_tie_all_bonds_as_tie_does_and_refuses_what_tie_refuses():
+    """`Structure.tie_all`: the same ties (Python int pairs, in order) as `tie` pair by pair,
+    and bad pairs refused with `tie`'s errors (a node out of range, a node tied to itself,
+    a float or bool index, an unknown method)."""
+    st_all, _ = rod_structure()
+    st_one, _ = rod_structure()
+    pairs = [(np.int64(0), np.int64(5)), (3, 7), (10, 2)]
+    st_all.tie_all(pairs)
+    for a, b in pairs:
+        st_one.tie(a, b)
+    assert st_all._merges == st_one._merges and all(type(v) is int for p in st_all._merges for v in p)
+    assert np.array_equal(st_all.supernodes(), st_one.supernodes())
+    st_all.tie_all(np.array([[1, 4]]))
+    assert st_all._merges[-1] == (1, 4)
+    for bad, match in (([(0, 11)], "does not exist"), ([(2, 2)], "itself"),
+                       ([(1.0, 2)], "integer node index"), ([(True, 2)], "integer node index"),
+                       ([(-1, 2)], "does not exist"), (np.array([[0, 11]]), "does not exist"),
+                       (np.array([[3, 3]]), "itself"), (np.array([[-1, 3]]), "does not exist"),
+                       (np.array([[True, False]]), "integer node index")):
+        with pytest.raises(ValueError, match=match):
+            rod_structure()[0].tie_all(bad)
+    with pytest.raises(ValueError, match="tie method"):
+        rod_structure()[0].tie_all([(1, 2)], method="glue")
+    springs, _ = rod_structure()
+    springs.tie_all([(0, 5), (3, 7)], method="spring", stiffness=1e5)
+    assert springs._spring_nodes == [(0, 5), (3, 7)] and springs._merges == []
+
+
+@pytest.mark.filterwarnings("ignore:All-NaN slice")  # (the message's np.nanmin of a NaN width)
+def test_scalar_sections_are_the_arrays_they_stand_for():
+    """A scalar width or thickness (its checks done once) gives the bits of the same value
+    per half edge; an invalid scalar is refused as before."""
+    a, b = Structure(), Structure()
+    a.add_rod(XZ, width=5e-3, thickness=5e-4, E=2.2e9)
+    b.add_rod(XZ, width=np.full((10, 2), 5e-3), thickness=np.full(10, 5e-4), E=2.2e9)
+    for x, y in zip(a.elements(), b.elements()):
+        assert x.tobytes() == y.tobytes()
+    assert a.rods[0].width.shape == (10, 2) and a.rods[0].width.flags.writeable
+    for value in (np.inf, np.nan, -5e-3, 0.0):
+        with pytest.raises(ValueError, match="width must be finite and > 0"):
+            Structure().add_rod(XZ, width=value, thickness=5e-4, E=2.2e9)
