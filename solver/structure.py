@@ -15,8 +15,9 @@ import scipy.sparse
 import scipy.sparse.csgraph
 from numba import njit
 
-from snapmorph.solver.assembly import element_dofs, total_energy
-from snapmorph.solver.constraints import ConstrainedStructure, bandwidth
+from snapmorph.solver.assembly import _connectivity_dofs, _fill_slots, total_energy
+from snapmorph.solver.banded import _profile, _row_starts
+from snapmorph.solver.constraints import ConstrainedStructure, _spread
 from snapmorph.solver.problem import state_from
 from snapmorph.solver.system import ReducedSystem
 
@@ -526,10 +527,6 @@ class Structure(ConstrainedStructure):
         loads = self._system_loads(force_unit) if dead_loads else None
         system = ReducedSystem(self.elements(normalized), *ordering, loads=loads,
                                layout=layout)
-        if layout[1] is None:  # the first system of this ordering: keep its layout
-            for a in (system.heights, *system.slots):
-                a.setflags(write=False)  # shared by every system of this ordering
-            layout[1:] = [system.heights, system.slots]
         system.force_unit = force_unit
         return system
 
@@ -538,9 +535,9 @@ class Structure(ConstrainedStructure):
         of held components and shared displacements: a unit's pushes, probes and state
         checks, and the copies of a structure (`copy`) that share its elements, reuse it
         (the key holds the supports, the extra held components, the exact ties and rigid
-        groups, and the element tables it was built from). ``layout``: [element DOFs,
-        envelope heights, band slots] of the systems built from it (a list: the element DOFs
-        come with the ordering, the rest is filled by the first system, None until then)."""
+        groups, and the element tables it was built from). ``layout``: (element DOFs,
+        envelope heights, band slots, representatives) of the systems built from it
+        (`ReducedSystem`), read-only."""
         key = (tuple(sorted((int(n), tuple(sorted(c))) for n, c in self._fixed.items())),
                tuple((int(n), int(c)) for n, c in (extra_fixed or ())),
                tuple(self._merges))
@@ -548,22 +545,24 @@ class Structure(ConstrainedStructure):
         if memo is None or memo[0] is not self._cache:  # built from other elements
             memo = self._orderings = (self._cache, {})
         if key not in memo[1]:
-            ordering, dofs = self._build_ordering(extra_fixed, elements)
-            memo[1][key] = (ordering, [dofs, None, None])
+            memo[1][key] = self._build_ordering(extra_fixed, elements)
         return memo[1][key]
 
     def _build_ordering(self, extra_fixed, elements):
-        """((dof_map, n_reduced, bandwidth), element DOFs) of `_ordering`."""
+        """((dof_map, n_reduced, bandwidth), layout) of `_ordering`."""
         rep, fixed = self._held(extra_fixed)
         group, n_groups = node_groups(rep)
-        order = _rcm_order(group, n_groups, (elements[0], elements[2], elements[4]))
-        dof_map, k = number_dofs(group, fixed, order)
+        conns = tuple(np.ascontiguousarray(elements[i], dtype=np.int64) for i in (0, 2, 4))
+        order = _rcm_order(group, n_groups, conns)
+        out = _ordering_layout(group, np.ascontiguousarray(fixed, dtype=np.bool_),
+                               np.ascontiguousarray(order, dtype=np.int64), *conns)
+        dof_map, k, bw, dofs, heights, slots, representative = \
+            out[0], out[1], out[2], out[3:6], out[6], out[7:10], out[10]
         if k == 0:
             raise ValueError("every degree of freedom is fixed: nothing to solve")
-        dofs = element_dofs(elements, dof_map)
-        for a in (dof_map, *dofs):
+        for a in (dof_map, *dofs, heights, *slots, representative):
             a.setflags(write=False)  # shared by every system built from this ordering
-        return (dof_map, k, bandwidth(*dofs)), dofs
+        return (dof_map, k, bw), (dofs, heights, slots, representative)
 
     # ------------------------------------------------------------------ energy access
     def energy(self, positions=None) -> float:
@@ -728,6 +727,36 @@ def _number_dofs(group, fixed, order):
         dof_map[2 * i] = group_dof[group[i], 0]
         dof_map[2 * i + 1] = group_dof[group[i], 1]
     return dof_map, k
+
+
+@njit(cache=True)
+def _ordering_layout(group, fixed, order, stretch, bend, spring):
+    """Everything a new DOF ordering fixes, in one compiled call (a dozen calls of the
+    kernels below cost 25 us per ordering): (dof_map, n_reduced, bandwidth, the element
+    DOFs of the three element kinds (`solver.assembly.element_dofs`), the envelope heights
+    of the band (`solver.banded.envelope_heights`), the band slots of the three kinds
+    (`solver.assembly.band_slots`), one full DOF per reduced DOF)."""
+    dof_map, k = _number_dofs(group, fixed, order)
+    ds = _connectivity_dofs(stretch, dof_map)
+    db = _connectivity_dofs(bend, dof_map)
+    dp = _connectivity_dofs(spring, dof_map)
+    bw = max(_spread(ds), _spread(db), _spread(dp))
+    first = np.arange(max(k, 1))
+    _row_starts(ds, first)
+    _row_starts(db, first)
+    _row_starts(dp, first)
+    heights = _profile(first)
+    ss = np.empty((ds.shape[0], 10), dtype=np.int64)
+    sb = np.empty((db.shape[0], 21), dtype=np.int64)
+    sp = np.empty((dp.shape[0], 10), dtype=np.int64)
+    _fill_slots(ds, bw + 1, ss)
+    _fill_slots(db, bw + 1, sb)
+    _fill_slots(dp, bw + 1, sp)
+    representative = np.empty(k, dtype=np.int64)
+    for j in range(dof_map.shape[0]):
+        if dof_map[j] >= 0:
+            representative[dof_map[j]] = j  # the last full DOF of a reduced one
+    return dof_map, k, bw, ds, db, dp, heights, ss, sb, sp, representative
 
 
 #: `_rcm_order`'s memory: (key, order) of the last orderings computed (a unit's pushes,

@@ -240,3 +240,38 @@ def test_supernodes_follow_ties_clamps_and_copies():
     assert np.array_equal(rep[:12], _old_supernodes(12, [(0, 6)]))
     sysm = st.reduced_system()
     assert sysm.n == 2 * (13 - 2)
+
+
+def test_a_new_orderings_layout_is_what_the_separate_kernels_give():
+    """`Structure._build_ordering` computes the element DOFs, bandwidth, envelope heights,
+    band slots and representatives of a new ordering in one compiled call: the arrays of
+    `element_dofs`, `bandwidth`, `envelope_heights`, `band_slots` and the numpy
+    representatives, on unit meshes with and without an extra held DOF and springs; and
+    `envelope_flops` of int heights is the float computation's."""
+    from snapmorph.solver.assembly import band_slots, element_dofs
+    from snapmorph.solver.banded import envelope_heights
+    from snapmorph.solver.constraints import bandwidth
+    from snapmorph.solver.sparse import envelope_flops
+    from snapmorph.units import UnitGeometry
+    from snapmorph.units.geometry import build_unit
+
+    for g, nodes, tie in ((UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3), 101, "exact"),
+                          (UnitGeometry(L=0.1, h=0.04, t=0.375e-3, w=5e-3, b=0), 41, "spring")):
+        model = build_unit(g, nodes=nodes, tie=tie)
+        for st in (model.structure, model.variant(actuator=False, supports=False).structure):
+            st.fix(int(model.base_nodes[0]), "xz")
+            for extra in (None, [(model.apex, 1)], [(model.apex, 0), (model.apex, 1)]):
+                (dof_map, k, bw), (dofs, heights, slots, rep) = \
+                    st._build_ordering(extra, st.elements())
+                want = element_dofs(st.elements(), dof_map)
+                assert all(np.array_equal(a, b) for a, b in zip(dofs, want))
+                assert bw == bandwidth(*want)
+                assert np.array_equal(heights, envelope_heights(max(k, 1), *want))
+                assert all(np.array_equal(a, b) for a, b in zip(slots, band_slots(want, bw + 1)))
+                free = np.flatnonzero(dof_map >= 0)
+                old = np.empty(k, dtype=np.int64)
+                old[dof_map[free]] = free
+                assert np.array_equal(rep, old)
+                assert envelope_flops(heights) == 0.5 * float(np.dot(heights.astype(float),
+                                                                     heights.astype(float)))
+                assert not any(a.flags.writeable for a in (dof_map, *dofs, heights, *slots, rep))
