@@ -131,12 +131,24 @@ def _add_slots(slots, npairs, hl, flat):
 
 def element_dofs(elements, dof_map):
     """Reduced DOF of every local coordinate of every element: (stretch (ne, 4),
-    bend (nb, 6), spring (ns, 4)) int arrays, -1 where fixed. Computed once per system."""
-    out = []
-    for conn in (elements[0], elements[2], elements[4]):
-        full = (2 * conn[:, :, None] + np.arange(2)[None, None, :]).reshape(conn.shape[0], 2 * conn.shape[1])
-        out.append(np.ascontiguousarray(dof_map[full], dtype=np.int64))
-    return tuple(out)
+    bend (nb, 6), spring (ns, 4)) int arrays, -1 where fixed. Computed once per DOF
+    ordering."""
+    dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
+    return tuple(_connectivity_dofs(np.ascontiguousarray(conn, dtype=np.int64), dof_map)
+                 for conn in (elements[0], elements[2], elements[4]))
+
+
+@njit(cache=True)
+def _connectivity_dofs(conn, dof_map):
+    """(n_elements, 2 k): the reduced DOFs (x, z per node, in the element's node order) of
+    the elements' nodes ``conn`` (n_elements, k) under ``dof_map`` (a compiled gather: the
+    index arithmetic in numpy cost 15 us per ordering)."""
+    out = np.empty((conn.shape[0], 2 * conn.shape[1]), dtype=np.int64)
+    for e in range(conn.shape[0]):
+        for a in range(conn.shape[1]):
+            out[e, 2 * a] = dof_map[2 * conn[e, a]]
+            out[e, 2 * a + 1] = dof_map[2 * conn[e, a] + 1]
+    return out
 
 
 @njit(cache=True, inline="always")

@@ -199,12 +199,7 @@ def make_control(structure, node, direction, distance, method, start=None) -> Co
     dim, names = int(structure.dim), structure.component_names
     if method not in METHODS:
         raise ValueError(f"method must be 'mgdc' or 'displacement'; got {method!r}")
-    n = real_array(direction, "direction").reshape(-1)
-    if n.shape != (dim,) or not np.all(np.isfinite(n)) or not np.any(n != 0.0):
-        raise ValueError(f"direction must be a finite non-zero ({', '.join(names)}) vector "
-                         f"(any length; it is normalised); got {direction!r}")
-    n = n / np.max(np.abs(n))  # no overflow for huge components
-    n = n / np.linalg.norm(n)
+    n = unit_direction(direction, dim, names)
     if distance is None:
         raise ValueError("distance (m) is required")
     distance = real_scalar(distance, "distance", "m")
@@ -243,11 +238,37 @@ def make_control(structure, node, direction, distance, method, start=None) -> Co
             )
         axis = axis_aligned[0]
         n = np.round(n)
-    member_dofs = np.array([structure.node_dofs(m) for m in members], dtype=np.int64)
+    many = getattr(structure, "nodes_dofs", None)  # the node_dofs of many nodes at once
+    member_dofs = np.asarray(many(members), dtype=np.int64) if many is not None else \
+        np.array([structure.node_dofs(m) for m in members], dtype=np.int64)
     if start is not None:
         d_start = float(n @ (start[dofs] - origin))  # n rounded for displacement control
     return Control(node, members, n, distance, method, axis, dofs, member_dofs, origin,
                    start, d_start)
+
+
+#: `unit_direction`'s memory: the unit vector of every direction asked for (by the bytes of
+#: the validated input: a unit pushes, probes and checks states along one or two directions)
+_DIRECTIONS: dict = {}
+_DIRECTIONS_KEPT = 64
+
+
+def unit_direction(direction, dim, names) -> np.ndarray:
+    """``direction`` as a unit (dim,) vector (a new array), or a ValueError naming it: finite,
+    non-zero, any length (``names``: the structure's component names, for the message)."""
+    n = real_array(direction, "direction").reshape(-1)
+    key = n.tobytes() if n.shape == (dim,) else None  # (-0.0 and 0.0 differ in bytes)
+    unit = _DIRECTIONS.get(key)
+    if unit is not None:
+        return unit.copy()
+    if n.shape != (dim,) or not np.all(np.isfinite(n)) or not np.any(n != 0.0):
+        raise ValueError(f"direction must be a finite non-zero ({', '.join(names)}) vector "
+                         f"(any length; it is normalised); got {direction!r}")
+    n = n / np.max(np.abs(n))  # no overflow for huge components
+    n = n / np.linalg.norm(n)
+    if len(_DIRECTIONS) < _DIRECTIONS_KEPT:
+        _DIRECTIONS[key] = n.copy()
+    return n
 
 
 def real_array(value, name):
@@ -265,6 +286,8 @@ def real_array(value, name):
 
 def real_scalar(value, name, unit):
     """``value`` as a float, or a ValueError naming the parameter and its unit."""
+    if type(value) is float:  # (what the code passes itself: nothing to convert)
+        return value
     if isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be a real number in {unit}; got {value!r}")
     arr = real_array(value, f"{name} ({unit})")
@@ -303,10 +326,10 @@ def state_from(structure, positions, name="positions"):
     q0 = structure.initial_state()
     if positions is None:
         return q0
-    arr = real_array(positions, name)
+    arr = _real_values(positions, name)  # (copied below: no copy of its own)
     shape = (structure.n_nodes, int(structure.dim))
     if arr.shape == q0.shape:
-        q = np.ascontiguousarray(arr.copy())
+        q = arr.copy()
     elif arr.shape == shape:
         q = q0
         view = structure.positions_of(q)
@@ -317,9 +340,17 @@ def state_from(structure, positions, name="positions"):
             q[dofs] = arr
     else:
         raise ValueError(f"{name} must have shape {shape} (m) or {q0.shape}; got {arr.shape}")
-    if not np.all(np.isfinite(q)):
+    if not np.isfinite(q).all():  # (the method: half the cost of np.all)
         raise ValueError(f"{name} contain NaN or infinite values")
     return q
+
+
+def _real_values(value, name):
+    """`real_array` without its copy where ``value`` already is a float array (a view: the
+    caller copies)."""
+    if type(value) is np.ndarray and value.dtype == np.float64:
+        return value
+    return real_array(value, name)
 
 
 def driver_system(structure, extra_fixed=None):

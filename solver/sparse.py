@@ -332,6 +332,13 @@ class SparseLDLT:
 def envelope_flops(heights):
     """Flops of the banded LDL^T within the envelope ``heights`` (sum of height^2 / 2, as
     `solver.ordering.envelope_cost`)."""
+    h = np.asarray(heights)
+    if h.dtype.kind in "iu":
+        # integer heights: the integer dot, without the conversion (asked by every new
+        # system); below 2^53 the float dot's partial sums are exact integers too
+        total = int(np.dot(h.astype(np.int64, copy=False), h.astype(np.int64, copy=False)))
+        if total < 2**53:
+            return 0.5 * float(total)
     h = np.asarray(heights, dtype=float)
     return 0.5 * float(np.dot(h, h))
 

@@ -50,7 +50,7 @@ class BandedSystem:
     None."""
 
     def __init__(self, dof_map, n_reduced, bandwidth, element_dofs, dof_scale=None, order="C",
-                 loads=None, heights=None):
+                 loads=None, heights=None, representative=None):
         self.dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
         # the dead-load record of `solver.assembly.assemble_dead_loads` (empty: none)
         self.loads = no_loads() if loads is None else load_record(*loads, self.dof_map)
@@ -59,10 +59,13 @@ class BandedSystem:
         self._scaled = dof_scale is not None
         self.dof_scale = (np.asarray(dof_scale, dtype=float) if self._scaled
                           else np.ones(self.dof_map.shape[0]))
-        # one full DOF per reduced DOF, to read reduced values off full states
-        free = np.flatnonzero(self.dof_map >= 0)
-        self.representative = np.empty(int(n_reduced), dtype=np.int64)
-        self.representative[self.dof_map[free]] = free
+        # one full DOF per reduced DOF, to read reduced values off full states (given: the
+        # same, computed before for this DOF map)
+        self.representative = representative
+        if representative is None:
+            free = np.flatnonzero(self.dof_map >= 0)
+            self.representative = np.empty(int(n_reduced), dtype=np.int64)
+            self.representative[self.dof_map[free]] = free
         self.n = int(n_reduced)
         self.bandwidth = int(bandwidth)
         self.band = np.zeros((self.bandwidth + 1, max(self.n, 1)), order=order)
@@ -318,17 +321,16 @@ class ReducedSystem(BandedSystem):
     (2 n_nodes + 2 n_ghosts,) full -> reduced DOF, ``loads`` dead loads (`BandedSystem`)."""
 
     def __init__(self, elements, dof_map, n_reduced, bandwidth, loads=None, layout=None):
-        """``layout``: (element DOFs, envelope heights, band slots) of these elements and
-        ``dof_map`` when already known (`Structure.reduced_system` keeps them with the DOF
-        ordering)."""
+        """``layout``: (element DOFs, envelope heights, band slots, representatives) of these
+        elements and ``dof_map`` when already known (`Structure.reduced_system` keeps them
+        with the DOF ordering)."""
         dof_map = np.ascontiguousarray(dof_map, dtype=np.int64)
         self.elements = elements
-        known = layout is not None and layout[0] is not None
-        self.dofs, heights, slots = layout if known else (element_dofs(elements, dof_map), None,
-                                                          None)
+        self.dofs, heights, slots, representative = layout if layout is not None else \
+            (element_dofs(elements, dof_map), None, None, None)
         # Fortran order: the factor and the solves walk the band's columns (1.5x faster)
         super().__init__(dof_map, n_reduced, bandwidth, self.dofs, order="F", loads=loads,
-                         heights=heights)
+                         heights=heights, representative=representative)
         # where every element's Hessian goes in the band (`solver.assembly.band_slots`)
         self.slots = band_slots(self.dofs, self.band.shape[0]) if slots is None else slots
         # the fused kernels, and their arguments after (q, lam, P[, uP1]) but the last

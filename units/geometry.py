@@ -355,7 +355,8 @@ def build_unit(
     if g.joint_length > 0:
         mirror = mirror[1:]  # the apex node is shared by both halves
     arch_x = np.concatenate([flat_left, half, mirror, (L - flat_left[::-1])])
-    arch_xz = np.stack([arch_x, g.arch_z(arch_x)], axis=1)
+    arch_xz = np.empty((arch_x.shape[0], 2))
+    arch_xz[:, 0], arch_xz[:, 1] = arch_x, g.arch_z(arch_x)
     # The bonded arch node half an edge past x0 sits on the base, not on the sinusoid (which
     # is O(h^3) above it): exact ties share displacements, so a non-zero offset between tied
     # nodes would resist rigid rotation of the unit (it stressed neighbouring units in arrays
@@ -366,12 +367,15 @@ def build_unit(
     arch_xz[-n_bond:, 1] = 0.0
 
     # per half edge: solid (4w) within the end regions, hollow (2w) between them
-    halves = np.stack([0.75 * base_x[:-1] + 0.25 * base_x[1:],
-                       0.25 * base_x[:-1] + 0.75 * base_x[1:]], axis=1)
+    halves = np.empty((base_x.shape[0] - 1, 2))
+    halves[:, 0] = 0.75 * base_x[:-1] + 0.25 * base_x[1:]
+    halves[:, 1] = 0.25 * base_x[:-1] + 0.75 * base_x[1:]
     base_width = np.where((halves < x0) | (halves > L - x0), 4.0 * g.w, 2.0 * g.w)
 
     st = Structure()
-    base = st.add_rod(np.stack([base_x, np.zeros_like(base_x)], 1), base_width, g.t, g.E)
+    base_xz = np.zeros((base_x.shape[0], 2))
+    base_xz[:, 0] = base_x
+    base = st.add_rod(base_xz, base_width, g.t, g.E)
     arch = st.add_rod(arch_xz, g.w, g.t, g.E)
 
     # bond every arch node of a flat end region to the coincident base node, and the nodes
@@ -379,10 +383,11 @@ def build_unit(
     n_flat = len(flat_left) + 1  # base and arch share these abscissae
     if partial:
         n_flat = int(np.count_nonzero(base_x <= min(glued, bond_end) + 1e-12 * L))
-    for k in range(n_flat):
-        pairs = ((arch.nodes[k], base.nodes[k]), (arch.nodes[-1 - k], base.nodes[-1 - k]))
-        for a, b in pairs:
-            st.tie(a, b, method=tie, stiffness=tie_stiffness)
+    k = np.arange(n_flat)
+    pairs = np.empty((2 * n_flat, 2), dtype=np.int64)  # (arch, base) pairs, from both ends in
+    pairs[0::2, 0], pairs[0::2, 1] = arch.nodes[k], base.nodes[k]
+    pairs[1::2, 0], pairs[1::2, 1] = arch.nodes[-1 - k], base.nodes[-1 - k]
+    st.tie_all(pairs, method=tie, stiffness=tie_stiffness)
 
     apex_local = len(arch_x) // 2
     apex = int(arch.nodes[apex_local])

@@ -52,11 +52,14 @@ def sinusoid_length(h: float, la: float, n: int = 4001) -> float:
 def segment_points(breaks, spacing):
     """Points along sorted ``breaks``, every interval split into equal parts no longer than
     ``spacing`` (every break point kept exactly): the abscissae of a mesh."""
-    pts = [float(breaks[0])]
-    for a, b in zip(breaks[:-1], breaks[1:]):
-        n = max(1, int(math.ceil((b - a) / spacing - 1e-9)))
-        pts.extend(a + (b - a) * np.arange(1, n + 1) / n)
-    return np.array(pts)
+    breaks = np.asarray(breaks, dtype=float)
+    a, span = breaks[:-1], breaks[1:] - breaks[:-1]
+    n = np.maximum(1, np.ceil(span / spacing - 1e-9).astype(np.int64))  # parts per interval
+    # every interval's points a + (b - a) k / n, k = 1..n, in one pass (a Python loop over
+    # the intervals cost 20 us a mesh)
+    which = np.repeat(np.arange(n.shape[0]), n)
+    k = np.arange(1, which.shape[0] + 1) - np.repeat(np.cumsum(n) - n, n)
+    return np.concatenate([breaks[:1], a[which] + span[which] * k / n[which]])
 
 
 def _wrapped_degrees(a: float) -> float:

@@ -162,3 +162,116 @@ def test_structure_copies_share_elements_not_constraints():
     more = free.copy()
     more.add_rod(np.array([[0.0, 0.02], [0.05, 0.03], [0.1, 0.02]]), 5e-3, 5e-4, 2.2e9)
     assert free.n_nodes == 42 and more.n_nodes == 45 and len(free.rods) == 2
+
+
+def _old_supernodes(n, pairs):
+    """The supernodes as `UnionFind` gave them (the code before `group_minima`)."""
+    from snapmorph.solver.constraints import UnionFind
+
+    uf = UnionFind(n)
+    for a, b in pairs:
+        uf.union(int(a), int(b))
+    return np.array([uf.find(i) for i in range(n)], dtype=np.int64)
+
+
+def _old_numbering(rep, fixed, order_of):
+    """group, dof_map and n_reduced as `Structure._build_ordering` numbered them in numpy
+    (before `node_groups` and `number_dofs`)."""
+    uniq, group = np.unique(rep, return_inverse=True)
+    n_groups = len(uniq)
+    order = order_of(n_groups)
+    group_fixed = np.zeros((n_groups, 2), dtype=bool)
+    group_fixed[group] = fixed
+    free = ~group_fixed[order]
+    group_dof = np.empty((n_groups, 2), dtype=np.int64)
+    group_dof[order] = np.where(free, np.cumsum(free.ravel()).reshape(-1, 2) - 1, -1)
+    return group, order, group_dof[group].reshape(-1), int(free.sum())
+
+
+def test_compiled_ordering_bookkeeping_matches_the_numpy_code():
+    """Supernodes (`group_minima`), node groups, the DOF numbering and the element DOFs by
+    compiled loops: the same arrays as the Python/numpy code they replace, on 300 random
+    tie sets, supports and element tables."""
+    from snapmorph.solver.assembly import element_dofs
+    from snapmorph.solver.constraints import group_minima
+    from snapmorph.solver.structure import node_groups, number_dofs
+
+    rng = np.random.default_rng(5)
+    for trial in range(300):
+        n = int(rng.integers(1, 60))
+        pairs = rng.integers(0, n, size=(int(rng.integers(0, 2 * n)), 2))
+        rep = group_minima(n, pairs.astype(np.int64))
+        assert np.array_equal(rep, _old_supernodes(n, pairs))
+        # the held components are the same for every node of a group (fixed_components)
+        held = rng.random((n, 2)) < 0.2
+        fixed = held[rep]
+        perm = rng.permutation(n)
+        group, order, want, k_want = _old_numbering(rep, fixed, lambda m: perm[perm < m])
+        got_group, n_groups = node_groups(rep)
+        assert np.array_equal(got_group, group) and n_groups == len(order)
+        dof_map, k = number_dofs(got_group, fixed, order)
+        assert np.array_equal(dof_map, want) and k == k_want
+        conns = [rng.integers(0, n, size=(int(rng.integers(0, 30)), m)) for m in (2, 3, 2)]
+        elements = (conns[0], None, conns[1], None, conns[2], None)
+        for got, conn in zip(element_dofs(elements, dof_map), conns):
+            full = (2 * conn[:, :, None] + np.arange(2)[None, None, :]).reshape(
+                conn.shape[0], 2 * conn.shape[1])
+            assert got.dtype == np.int64 and np.array_equal(got, dof_map[full])
+
+
+def test_supernodes_follow_ties_clamps_and_copies():
+    """The supernodes memo is rebuilt when a tie, rigid group or sliding clamp is added, and
+    a copy's ties do not reach its original (a copy starts without the memo)."""
+    from snapmorph.solver.structure import Structure
+
+    st = Structure()
+    x = np.linspace(0.0, 0.1, 6)
+    st.add_rod(np.stack([x, np.zeros(6)], 1), 5e-3, 5e-4, 2.2e9)
+    st.add_rod(np.stack([x, np.full(6, 0.01)], 1), 5e-3, 5e-4, 2.2e9)
+    assert np.array_equal(st.supernodes(), np.arange(12))
+    other = st.copy()
+    st.tie(0, 6)
+    assert st.supernodes()[6] == 0 and other.supernodes()[6] == 6
+    other.rigid([11, 3, 7])
+    assert list(other.supernodes()[[3, 7, 11]]) == [3, 3, 3] and st.supernodes()[11] == 11
+    st.clamp(5, toward=4, hold_position=False)  # a sliding clamp's ghost moves with its node
+    rep = st.supernodes()
+    assert len(rep) == 13 and rep[12] == 5
+    assert np.array_equal(rep[:12], _old_supernodes(12, [(0, 6)]))
+    sysm = st.reduced_system()
+    assert sysm.n == 2 * (13 - 2)
+
+
+def test_a_new_orderings_layout_is_what_the_separate_kernels_give():
+    """`Structure._build_ordering` computes the element DOFs, bandwidth, envelope heights,
+    band slots and representatives of a new ordering in one compiled call: the arrays of
+    `element_dofs`, `bandwidth`, `envelope_heights`, `band_slots` and the numpy
+    representatives, on unit meshes with and without an extra held DOF and springs; and
+    `envelope_flops` of int heights is the float computation's."""
+    from snapmorph.solver.assembly import band_slots, element_dofs
+    from snapmorph.solver.banded import envelope_heights
+    from snapmorph.solver.constraints import bandwidth
+    from snapmorph.solver.sparse import envelope_flops
+    from snapmorph.units import UnitGeometry
+    from snapmorph.units.geometry import build_unit
+
+    for g, nodes, tie in ((UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3), 101, "exact"),
+                          (UnitGeometry(L=0.1, h=0.04, t=0.375e-3, w=5e-3, b=0), 41, "spring")):
+        model = build_unit(g, nodes=nodes, tie=tie)
+        for st in (model.structure, model.variant(actuator=False, supports=False).structure):
+            st.fix(int(model.base_nodes[0]), "xz")
+            for extra in (None, [(model.apex, 1)], [(model.apex, 0), (model.apex, 1)]):
+                (dof_map, k, bw), (dofs, heights, slots, rep) = \
+                    st._build_ordering(extra, st.elements())
+                want = element_dofs(st.elements(), dof_map)
+                assert all(np.array_equal(a, b) for a, b in zip(dofs, want))
+                assert bw == bandwidth(*want)
+                assert np.array_equal(heights, envelope_heights(max(k, 1), *want))
+                assert all(np.array_equal(a, b) for a, b in zip(slots, band_slots(want, bw + 1)))
+                free = np.flatnonzero(dof_map >= 0)
+                old = np.empty(k, dtype=np.int64)
+                old[dof_map[free]] = free
+                assert np.array_equal(rep, old)
+                assert envelope_flops(heights) == 0.5 * float(np.dot(heights.astype(float),
+                                                                     heights.astype(float)))
+                assert not any(a.flags.writeable for a in (dof_map, *dofs, heights, *slots, rep))

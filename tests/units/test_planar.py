@@ -1,6 +1,7 @@
 """The planar unit as built and used: joint and bond parameters, the released state, what
 "bistable" means (state (iii) stable), time limits, scale-free numbers, argument validation."""
 
+import dataclasses
 import math
 import time
 
@@ -303,3 +304,40 @@ def test_repr_is_short(paper):
     assert "bistable" in text and "F_cr=1.097 N" in text
     r = simulate_unit(UnitGeometry(L=0.1, h=0.0, t=0.5e-3, w=5e-3))
     assert "not bistable" in repr(r)
+
+
+def _old_segment_points(breaks, spacing):
+    """`units.shapes.segment_points` as a loop over the intervals (the code it replaced)."""
+    import math
+
+    pts = [float(breaks[0])]
+    for a, b in zip(breaks[:-1], breaks[1:]):
+        n = max(1, int(math.ceil((b - a) / spacing - 1e-9)))
+        pts.extend(a + (b - a) * np.arange(1, n + 1) / n)
+    return np.array(pts)
+
+
+def test_segment_points_in_one_pass_are_the_loops_points():
+    from snapmorph.units.shapes import segment_points
+
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        breaks = np.sort(rng.uniform(0.0, rng.uniform(1e-3, 10.0), int(rng.integers(1, 12))))
+        if rng.random() < 0.3:  # break points a whole number of spacings apart
+            breaks = np.cumsum(np.concatenate([[0.0], rng.integers(1, 5, 4) * 0.01]))
+        spacing = rng.uniform(1e-3, 1.0) * (breaks[-1] - breaks[0] + 1e-3)
+        got = segment_points(breaks, spacing)
+        assert got.tobytes() == _old_segment_points(breaks, spacing).tobytes()
+
+
+def test_a_unit_at_the_reference_scale_is_solved_on_its_own_geometry():
+    """simulate_unit solves a unit given at L = 0.1 m, E = 2.2 GPa on that very geometry
+    (validated once); any other is scaled to it."""
+    from snapmorph.units.planar import E_INTERNAL, _reference_geometry
+
+    g = UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3)
+    assert _reference_geometry(g, 1.0) is g
+    other = dataclasses.replace(g, E=1e9)
+    assert _reference_geometry(other, 1.0) == dataclasses.replace(g, E=E_INTERNAL)
+    big = g.scaled(3.0)
+    assert _reference_geometry(big, 3.0) == dataclasses.replace(big.scaled(1 / 3.0), E=E_INTERNAL)
