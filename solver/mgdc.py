@@ -13,6 +13,7 @@ number of iterations, as in Liu & Paulino's modification.
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -145,6 +146,7 @@ class _Mgdc:
         self.total_iterations = 0
         self.travelled = 0.0  # sum of |dd| along the path, m (wandering guard)
         self.arc = 0.0  # the path's length so far in the step norm (reduced DOFs), m
+        self._trial = None  # (q_try, its reduced step, its flexibility) seen by `_crosses`
 
     def node_component(self, u):
         """The pushed node's component along the direction of a reduced vector ``u``."""
@@ -230,7 +232,7 @@ class _Mgdc:
         (q_try, lam_try, iterations as step control counts them, converged)."""
         system, P, tol_disp = self.system, self.P, self.tol_disp
         q_try = self.q.copy()
-        dlam = self.sign * self.s / np.linalg.norm(uP1)
+        dlam = self.sign * self.s / math.sqrt(float(uP1 @ uP1))
         lam_try = self.lam + dlam
         system.increment(q_try, uP1, dlam)
         if self.o["predictor"] == "second-order":
@@ -310,6 +312,7 @@ class _Mgdc:
         system = self.system
         flex = self.node_component(uP)
         step = system.reduced(q_try) - system.reduced(self.q)
+        self._trial = (q_try, step, flex)  # what `_accept` needs of the same state
         orient = 1.0 if float(uP @ step) >= 0.0 else -1.0
         return self.monitor.suspicious(held_count(system.negative_eigenvalues, flex),
                                        orient * (1.0 if flex >= 0.0 else -1.0))
@@ -344,7 +347,9 @@ class _Mgdc:
         if target is not None:
             q_try, lam_try, it, uP_try = self._land(target, q_try, lam_try, it, uP_try)
         # accepted: the system holds K at q_try
-        self.step_prev = system.reduced(q_try) - system.reduced(self.q)
+        trial, self._trial = self._trial, None
+        seen = trial is not None and trial[0] is q_try and uP_try is not None
+        self.step_prev = trial[1] if seen else system.reduced(q_try) - system.reduced(self.q)
         self.q, self.lam = q_try, lam_try
         system.accept(self.q)
         self.uP = system.solve(self.P) if uP_try is None else uP_try
@@ -352,7 +357,7 @@ class _Mgdc:
         neg = system.negative_eigenvalues
         # Schur complement: dF/dd of the pushed node is 1 / (n . u_P); a negative one
         # accounts for one negative eigenvalue that holding the displacement removes.
-        flex = self.node_component(self.uP)
+        flex = trial[2] if seen else self.node_component(self.uP)
         negd = held_count(neg, flex)
         energy, iterations = system.energy, it
         if monitor is not None:
@@ -380,7 +385,7 @@ class _Mgdc:
         if self.travelled > WANDER * distance:
             self.status = _wandering(rec, self.travelled, distance)
             return False
-        self.arc += float(np.linalg.norm(self.step_prev))
+        self.arc += math.sqrt(float(self.step_prev @ self.step_prev))
         if self.o["max_step"] is None:  # the control may let the steps grow with the path
             self.s_max = self.control.max_step(self.s_max0, self.arc)
         target = self.o["target_iterations"]
