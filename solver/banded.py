@@ -502,11 +502,188 @@ def ldlt_solve_envelope(band, heights, b):
     return _solve(band, heights, b)
 
 
+@njit(cache=True)
+def _rows1(band, heights, b):
+    """`_solve` for one right-hand side of a band of 9 rows or more below the diagonal.
+
+    Forward by rows: y_i = b_i - sum_j L_ij y_j over the columns j < i in increasing
+    order, as the column sweep subtracts them (the same bits); the 9 columns before row
+    i give theirs from the band (entries below a column's envelope are zeros: x - 0 y
+    = x up to the sign of a zero) with the y_j kept in registers, so that the chain
+    from one row to the next is one product and one subtraction; a column reaching
+    further than 9 rows pushes the rest of its entries down the right-hand side when
+    y_j is known (before any of the rows' own pulls, which come from later columns).
+    y_i / d_i is stored as the row is done. Back substitution by columns, x_{j+1} from
+    a register, a column within a 9-row window as 9 terms (no varying loop length to
+    mispredict). 5.8 -> 3.6 us on the specimen."""
+    n = band.shape[1]
+    y1 = y2 = y3 = y4 = y5 = y6 = y7 = y8 = y9 = 0.0
+    for i in range(n):
+        s = b[i, 0]
+        if i >= 9:
+            s -= band[9, i - 9] * y9
+            s -= band[8, i - 8] * y8
+            s -= band[7, i - 7] * y7
+            s -= band[6, i - 6] * y6
+            s -= band[5, i - 5] * y5
+            s -= band[4, i - 4] * y4
+            s -= band[3, i - 3] * y3
+            s -= band[2, i - 2] * y2
+            s -= band[1, i - 1] * y1
+        elif i >= 1:
+            if i >= 8:
+                s -= band[8, i - 8] * y8
+            if i >= 7:
+                s -= band[7, i - 7] * y7
+            if i >= 6:
+                s -= band[6, i - 6] * y6
+            if i >= 5:
+                s -= band[5, i - 5] * y5
+            if i >= 4:
+                s -= band[4, i - 4] * y4
+            if i >= 3:
+                s -= band[3, i - 3] * y3
+            if i >= 2:
+                s -= band[2, i - 2] * y2
+            s -= band[1, i - 1] * y1
+        y9, y8, y7, y6, y5, y4, y3, y2, y1 = y8, y7, y6, y5, y4, y3, y2, y1, s
+        m = heights[i]
+        if m > 9 and s != 0.0:
+            for k in range(10, m + 1):
+                b[i + k, 0] -= band[k, i] * s
+        b[i, 0] = s / band[0, i]
+    x = 0.0
+    for j in range(n - 1, -1, -1):
+        m = heights[j]
+        s = b[j, 0]
+        if m <= 9 and j + 9 < n:
+            s -= band[1, j] * x
+            for i in range(2, 10):
+                s -= band[i, j] * b[j + i, 0]
+        elif m >= 1:
+            s -= band[1, j] * x
+            for i in range(2, m + 1):
+                s -= band[i, j] * b[j + i, 0]
+        b[j, 0] = s
+        x = s
+    return b
+
+
+@njit(cache=True)
+def _rows2(band, heights, b):
+    """`_rows1` for two right-hand sides (an MGDC corrector's), both in the same loops
+    (the same operations per side as `_rows1`, a zero entry of one side carried along
+    when the other's is not: x - l 0 = x)."""
+    n = band.shape[1]
+    y1 = y2 = y3 = y4 = y5 = y6 = y7 = y8 = y9 = 0.0
+    z1 = z2 = z3 = z4 = z5 = z6 = z7 = z8 = z9 = 0.0
+    for i in range(n):
+        s0 = b[i, 0]
+        s1 = b[i, 1]
+        if i >= 9:
+            lk = band[9, i - 9]
+            s0 -= lk * y9
+            s1 -= lk * z9
+            lk = band[8, i - 8]
+            s0 -= lk * y8
+            s1 -= lk * z8
+            lk = band[7, i - 7]
+            s0 -= lk * y7
+            s1 -= lk * z7
+            lk = band[6, i - 6]
+            s0 -= lk * y6
+            s1 -= lk * z6
+            lk = band[5, i - 5]
+            s0 -= lk * y5
+            s1 -= lk * z5
+            lk = band[4, i - 4]
+            s0 -= lk * y4
+            s1 -= lk * z4
+            lk = band[3, i - 3]
+            s0 -= lk * y3
+            s1 -= lk * z3
+            lk = band[2, i - 2]
+            s0 -= lk * y2
+            s1 -= lk * z2
+            lk = band[1, i - 1]
+            s0 -= lk * y1
+            s1 -= lk * z1
+        elif i >= 1:
+            if i >= 8:
+                lk = band[8, i - 8]
+                s0 -= lk * y8
+                s1 -= lk * z8
+            if i >= 7:
+                lk = band[7, i - 7]
+                s0 -= lk * y7
+                s1 -= lk * z7
+            if i >= 6:
+                lk = band[6, i - 6]
+                s0 -= lk * y6
+                s1 -= lk * z6
+            if i >= 5:
+                lk = band[5, i - 5]
+                s0 -= lk * y5
+                s1 -= lk * z5
+            if i >= 4:
+                lk = band[4, i - 4]
+                s0 -= lk * y4
+                s1 -= lk * z4
+            if i >= 3:
+                lk = band[3, i - 3]
+                s0 -= lk * y3
+                s1 -= lk * z3
+            if i >= 2:
+                lk = band[2, i - 2]
+                s0 -= lk * y2
+                s1 -= lk * z2
+            lk = band[1, i - 1]
+            s0 -= lk * y1
+            s1 -= lk * z1
+        y9, y8, y7, y6, y5, y4, y3, y2, y1 = y8, y7, y6, y5, y4, y3, y2, y1, s0
+        z9, z8, z7, z6, z5, z4, z3, z2, z1 = z8, z7, z6, z5, z4, z3, z2, z1, s1
+        m = heights[i]
+        if m > 9 and (s0 != 0.0 or s1 != 0.0):
+            for k in range(10, m + 1):
+                lk = band[k, i]
+                b[i + k, 0] -= lk * s0
+                b[i + k, 1] -= lk * s1
+        d = band[0, i]
+        b[i, 0] = s0 / d
+        b[i, 1] = s1 / d
+    x0 = 0.0
+    x1 = 0.0
+    for j in range(n - 1, -1, -1):
+        m = heights[j]
+        s0 = b[j, 0]
+        s1 = b[j, 1]
+        if m >= 1:
+            lk = band[1, j]
+            s0 -= lk * x0
+            s1 -= lk * x1
+        if m <= 9 and j + 9 < n:
+            for i in range(2, 10):
+                li = band[i, j]
+                s0 -= li * b[j + i, 0]
+                s1 -= li * b[j + i, 1]
+        else:
+            for i in range(2, m + 1):
+                li = band[i, j]
+                s0 -= li * b[j + i, 0]
+                s1 -= li * b[j + i, 1]
+        b[j, 0] = s0
+        b[j, 1] = s1
+        x0 = s0
+        x1 = s1
+    return b
+
 @njit(cache=True, inline="always")
 def _solve(band, heights, b):
     # all right-hand sides in one sweep over the factor: each column of L is read once
     n = band.shape[1]
     nc = b.shape[1]
+    if band.shape[0] > 9 and n > 9 and 1 <= nc <= 2:  # (a unit's band: by rows)
+        return _rows1(band, heights, b) if nc == 1 else _rows2(band, heights, b)
     if nc == 2:
         return _solve2(band, heights, b)
     for j in range(n):
