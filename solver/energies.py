@@ -103,23 +103,40 @@ def turning_jet(x0, z0, x1, z1, x2, z2):
     b0 = z1 - z0
     a1 = x2 - x1
     b1 = z2 - z1
-    s0 = a0 * a0 + b0 * b0
-    s1 = a1 * a1 + b1 * b1
+    return turning_jet_edges(a0, b0, edge_turn(a0, b0), a1, b1, edge_turn(a1, b1))
+
+
+@njit(cache=True, inline="always")
+def edge_turn(a, b):
+    """What the turning angle's derivatives take from one edge e = (a, b): (|e|^2, |e|,
+    p_x, p_z, u, v) with d(theta)/de = (p_x, p_z) = (-b, a)/|e|^2 and
+    d2(theta)/de2 = [[u, v], [v, -u]] = [[-2 p_x p_z, p_x^2 - p_z^2], .]. Two bending
+    stencils share an edge; the assembler computes this once for both (`turning_jet_edges`:
+    the first edge takes it negated, exactly)."""
+    s = a * a + b * b
+    px = -b / s
+    pz = a / s
+    return s, np.sqrt(s), px, pz, -2.0 * px * pz, px * px - pz * pz
+
+
+@njit(cache=True, inline="always")
+def turning_jet_edges(a0, b0, t0, a1, b1, t1):
+    """`_turning_jet` from the edges e0 = (a0, b0) = x1 - x0, e1 = (a1, b1) = x2 - x1 and
+    their `edge_turn` ``t0``, ``t1``."""
+    s0, r0, q0x, q0z, w0, y0 = t0
+    s1, r1, p1x, p1z, u1, v1 = t1
     # kappa = 2 f / g, f = e0 x e1, g = |e0||e1| + e0 . e1 (as `turning_curvature`)
-    g = np.sqrt(s0) * np.sqrt(s1) + a0 * a1 + b0 * b1
+    g = r0 * r1 + a0 * a1 + b0 * b1
     kappa = 2.0 * (a0 * b1 - b0 * a1) / g
     k1 = 1.0 + 0.25 * kappa * kappa
     k2 = 0.5 * kappa * k1
-    # d(phi)/de0 = -d(theta0)/de0, d(phi)/de1 = d(theta1)/de1
-    p0x = b0 / s0
-    p0z = -a0 / s0
-    p1x = -b1 / s1
-    p1z = a1 / s1
-    # in terms of p: d2(phi)/de0^2 = [[2 px pz, pz^2 - px^2], .], d2(phi)/de1^2 its negative
-    u0 = 2.0 * p0x * p0z
-    v0 = p0z * p0z - p0x * p0x
-    u1 = -2.0 * p1x * p1z
-    v1 = p1x * p1x - p1z * p1z
+    # d(phi)/de0 = -d(theta0)/de0 = (b0, -a0)/|e0|^2, d(phi)/de1 = d(theta1)/de1; so
+    # d2(phi)/de0^2 = [[2 p0x p0z, p0z^2 - p0x^2], .] = -d2(theta0)/de0^2 (the negations
+    # are exact: these are the bits of the formulas written for e0)
+    p0x = -q0x
+    p0z = -q0z
+    u0 = -w0
+    v0 = -y0
     # nodes: e0 = x1 - x0, e1 = x2 - x1
     return (kappa, k1, k2, -p0x, -p0z, p0x - p1x, p0z - p1z, p1x, p1z, u0, v0, u1, v1)
 
