@@ -24,11 +24,9 @@ import numpy as np
 from numba import njit
 
 from snapmorph.solver.banded import written_extent
-from snapmorph.solver.energies import (bending_gradient, bending_lower, bending_scales,
-                                       dead_load_terms, spring_gradient, spring_lower,
-                                       stretch_force, stretch_gradient, stretch_jet,
-                                       stretch_lower, edge_turn, turning_jet_edges,
-                                       turning_lower)
+from snapmorph.solver.energies import (bending_lower, bending_scales, dead_load_terms,
+                                       edge_turn, spring_lower, stretch_force, stretch_jet,
+                                       stretch_lower, turning_jet_edges, turning_lower)
 
 
 @njit(cache=True)
@@ -39,13 +37,6 @@ def _add_gradient(nodes, dofs, nloc, g, grad_red, grad_full):
         ra = dofs[a]
         if ra >= 0:
             grad_red[ra] += g[a]
-
-
-@njit(cache=True)
-def _add_full(nodes, nloc, g, grad_full):
-    """Add an element's gradient ``g`` (nloc,) to the full gradient."""
-    for a in range(nloc):
-        grad_full[2 * nodes[a >> 1] + (a & 1)] += g[a]
 
 
 @njit(cache=True)
@@ -467,23 +458,57 @@ def assemble_gradient(q, elements, dof_map, grad_red, grad_full):
     stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
     grad_full[:] = 0.0
     energy = 0.0
-    x4, g4 = np.empty(4), np.empty(4)
-    x6, g6 = np.empty(6), np.empty(6)
+    # as `assemble_banded` computes them (scalars, edges shared along a rod), in one pass
     for e in range(stretch_nodes.shape[0]):
-        nodes = stretch_nodes[e]
-        _gather(q, nodes, 2, x4)
-        energy += stretch_gradient(x4, stretch_params[e, 0], stretch_params[e, 1], g4)
-        _add_full(nodes, 4, g4, grad_full)
+        a = 2 * stretch_nodes[e, 0]
+        b = 2 * stretch_nodes[e, 1]
+        en, gx, gz, _, _, _ = stretch_jet(q[a], q[a + 1], q[b], q[b + 1],
+                                          stretch_params[e, 0], stretch_params[e, 1])
+        energy += en
+        grad_full[a] += -gx
+        grad_full[a + 1] += -gz
+        grad_full[b] += gx
+        grad_full[b + 1] += gz
+    last0 = -1
+    last1 = -1
+    a1 = b1 = 0.0
+    t1 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     for e in range(bend_nodes.shape[0]):
-        nodes = bend_nodes[e]
-        _gather(q, nodes, 3, x6)
-        energy += bending_gradient(x6, bend_params[e, 0], bend_params[e, 1], g6)
-        _add_full(nodes, 6, g6, grad_full)
+        n0 = bend_nodes[e, 0]
+        n1 = bend_nodes[e, 1]
+        n2 = bend_nodes[e, 2]
+        if n0 == last0 and n1 == last1:
+            a0 = a1
+            b0 = b1
+            t0 = t1
+        else:
+            a0 = q[2 * n1] - q[2 * n0]
+            b0 = q[2 * n1 + 1] - q[2 * n0 + 1]
+            t0 = edge_turn(a0, b0)
+        a1 = q[2 * n2] - q[2 * n1]
+        b1 = q[2 * n2 + 1] - q[2 * n1 + 1]
+        t1 = edge_turn(a1, b1)
+        last0 = n1
+        last1 = n2
+        jet = turning_jet_edges(a0, b0, t0, a1, b1, t1)
+        en, alpha, _ = bending_scales(jet, bend_params[e, 0], bend_params[e, 1])
+        energy += en
+        grad_full[2 * n0] += alpha * jet[3]
+        grad_full[2 * n0 + 1] += alpha * jet[4]
+        grad_full[2 * n1] += alpha * jet[5]
+        grad_full[2 * n1 + 1] += alpha * jet[6]
+        grad_full[2 * n2] += alpha * jet[7]
+        grad_full[2 * n2 + 1] += alpha * jet[8]
     for e in range(spring_nodes.shape[0]):
-        nodes = spring_nodes[e]
-        _gather(q, nodes, 2, x4)
+        a = 2 * spring_nodes[e, 0]
+        b = 2 * spring_nodes[e, 1]
         k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
-        energy += spring_gradient(x4, k, ox, oz, g4)
-        _add_full(nodes, 4, g4, grad_full)
+        dx = q[a] - q[b] - ox
+        dz = q[a + 1] - q[b + 1] - oz
+        energy += 0.5 * k * (dx * dx + dz * dz)
+        grad_full[a] += k * dx
+        grad_full[a + 1] += k * dz
+        grad_full[b] += -k * dx
+        grad_full[b + 1] += -k * dz
     _reduce_gradient(dof_map, grad_full, grad_red)
     return energy
