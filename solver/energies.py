@@ -24,8 +24,15 @@ from numba import njit
 def _stretch_jet(x, EA, rest_length):
     """(E (J), d(E)/d(xb) = (gx, gz) (N), the 2x2 block (hxx, hxz, hzz) (N/m)) of one edge;
     d(E)/d(xa) = -(gx, gz) and d2(E)/dx2 = [[H, -H], [-H, H]]."""
-    ex = x[2] - x[0]
-    ez = x[3] - x[1]
+    return stretch_jet(x[0], x[1], x[2], x[3], EA, rest_length)
+
+
+@njit(cache=True, inline="always")
+def stretch_jet(xa, za, xb, zb, EA, rest_length):
+    """`_stretch_jet` of the edge from (xa, za) to (xb, zb) (m), from scalars: what the
+    assembler calls, with no array between the state and the element."""
+    ex = xb - xa
+    ez = zb - za
     length = np.sqrt(ex * ex + ez * ez)
     k = EA / rest_length
     stretch = length - rest_length
@@ -85,27 +92,51 @@ def _turning_jet(x):
     d2(theta)/de2 = [[2 ex ez, ez^2 - ex^2], [., -2 ex ez]]/|e|^4: no cross-edge terms. Returns
     (kappa, k1, k2, P (6 node components of d(phi)), u0, v0, u1, v1) with
     d2(phi)/de_i^2 = [[u_i, v_i], [v_i, -u_i]] (1/m^2 and 1/m)."""
-    a0 = x[2] - x[0]
-    b0 = x[3] - x[1]
-    a1 = x[4] - x[2]
-    b1 = x[5] - x[3]
-    s0 = a0 * a0 + b0 * b0
-    s1 = a1 * a1 + b1 * b1
+    return turning_jet(x[0], x[1], x[2], x[3], x[4], x[5])
+
+
+@njit(cache=True, inline="always")
+def turning_jet(x0, z0, x1, z1, x2, z2):
+    """`_turning_jet` of the nodes (x0, z0), (x1, z1), (x2, z2) (m), from scalars: what the
+    assembler calls, with no array between the state and the element."""
+    a0 = x1 - x0
+    b0 = z1 - z0
+    a1 = x2 - x1
+    b1 = z2 - z1
+    return turning_jet_edges(a0, b0, edge_turn(a0, b0), a1, b1, edge_turn(a1, b1))
+
+
+@njit(cache=True, inline="always")
+def edge_turn(a, b):
+    """What the turning angle's derivatives take from one edge e = (a, b): (|e|^2, |e|,
+    p_x, p_z, u, v) with d(theta)/de = (p_x, p_z) = (-b, a)/|e|^2 and
+    d2(theta)/de2 = [[u, v], [v, -u]] = [[-2 p_x p_z, p_x^2 - p_z^2], .]. Two bending
+    stencils share an edge; the assembler computes this once for both (`turning_jet_edges`:
+    the first edge takes it negated, exactly)."""
+    s = a * a + b * b
+    px = -b / s
+    pz = a / s
+    return s, np.sqrt(s), px, pz, -2.0 * px * pz, px * px - pz * pz
+
+
+@njit(cache=True, inline="always")
+def turning_jet_edges(a0, b0, t0, a1, b1, t1):
+    """`_turning_jet` from the edges e0 = (a0, b0) = x1 - x0, e1 = (a1, b1) = x2 - x1 and
+    their `edge_turn` ``t0``, ``t1``."""
+    s0, r0, q0x, q0z, w0, y0 = t0
+    s1, r1, p1x, p1z, u1, v1 = t1
     # kappa = 2 f / g, f = e0 x e1, g = |e0||e1| + e0 . e1 (as `turning_curvature`)
-    g = np.sqrt(s0) * np.sqrt(s1) + a0 * a1 + b0 * b1
+    g = r0 * r1 + a0 * a1 + b0 * b1
     kappa = 2.0 * (a0 * b1 - b0 * a1) / g
     k1 = 1.0 + 0.25 * kappa * kappa
     k2 = 0.5 * kappa * k1
-    # d(phi)/de0 = -d(theta0)/de0, d(phi)/de1 = d(theta1)/de1
-    p0x = b0 / s0
-    p0z = -a0 / s0
-    p1x = -b1 / s1
-    p1z = a1 / s1
-    # in terms of p: d2(phi)/de0^2 = [[2 px pz, pz^2 - px^2], .], d2(phi)/de1^2 its negative
-    u0 = 2.0 * p0x * p0z
-    v0 = p0z * p0z - p0x * p0x
-    u1 = -2.0 * p1x * p1z
-    v1 = p1x * p1x - p1z * p1z
+    # d(phi)/de0 = -d(theta0)/de0 = (b0, -a0)/|e0|^2, d(phi)/de1 = d(theta1)/de1; so
+    # d2(phi)/de0^2 = [[2 p0x p0z, p0z^2 - p0x^2], .] = -d2(theta0)/de0^2 (the negations
+    # are exact: these are the bits of the formulas written for e0)
+    p0x = -q0x
+    p0z = -q0z
+    u0 = -w0
+    v0 = -y0
     # nodes: e0 = x1 - x0, e1 = x2 - x1
     return (kappa, k1, k2, -p0x, -p0z, p0x - p1x, p0z - p1z, p1x, p1z, u0, v0, u1, v1)
 
@@ -113,17 +144,23 @@ def _turning_jet(x):
 @njit(cache=True, inline="always")
 def _turning_lower(jet, alpha, beta, grad, hl):
     """grad = alpha d(phi) (6,) and the lower triangle of beta d(phi) d(phi)^T + alpha d2(phi)
-    packed by rows into ``hl`` (21,) (row r, column c <= r at r (r + 1) / 2 + c).
+    packed by rows into ``hl`` (21,) (row r, column c <= r at r (r + 1) / 2 + c)."""
+    P = jet[3:9]
+    for i in range(6):
+        grad[i] = alpha * P[i]
+    h = turning_lower(jet, alpha, beta)
+    for k in range(21):
+        hl[k] = h[k]
+
+
+@njit(cache=True, inline="always")
+def turning_lower(jet, alpha, beta):
+    """The lower triangle of beta d(phi) d(phi)^T + alpha d2(phi) packed by rows (a tuple of
+    21: row r, column c <= r at r (r + 1) / 2 + c), from the `_turning_jet` ``jet``.
 
     d2(phi) in the nodes from the edge blocks T_i = d2(phi)/de_i^2: [[T0, -T0, 0],
     [-T0, T0 + T1, -T1], [0, -T1, T1]]."""
     _, _, _, P0, P1, P2, P3, P4, P5, u0, v0, u1, v1 = jet
-    grad[0] = alpha * P0
-    grad[1] = alpha * P1
-    grad[2] = alpha * P2
-    grad[3] = alpha * P3
-    grad[4] = alpha * P4
-    grad[5] = alpha * P5
     a0 = alpha * u0
     b0 = alpha * v0
     a1 = alpha * u1
@@ -134,27 +171,27 @@ def _turning_lower(jet, alpha, beta, grad, hl):
     q3 = beta * P3
     q4 = beta * P4
     q5 = beta * P5
-    hl[0] = q0 * P0 + a0
-    hl[1] = q1 * P0 + b0
-    hl[2] = q1 * P1 - a0
-    hl[3] = q2 * P0 - a0
-    hl[4] = q2 * P1 - b0
-    hl[5] = q2 * P2 + (a0 + a1)
-    hl[6] = q3 * P0 - b0
-    hl[7] = q3 * P1 + a0
-    hl[8] = q3 * P2 + (b0 + b1)
-    hl[9] = q3 * P3 - (a0 + a1)
-    hl[10] = q4 * P0
-    hl[11] = q4 * P1
-    hl[12] = q4 * P2 - a1
-    hl[13] = q4 * P3 - b1
-    hl[14] = q4 * P4 + a1
-    hl[15] = q5 * P0
-    hl[16] = q5 * P1
-    hl[17] = q5 * P2 - b1
-    hl[18] = q5 * P3 + a1
-    hl[19] = q5 * P4 + b1
-    hl[20] = q5 * P5 - a1
+    return (q0 * P0 + a0,
+            q1 * P0 + b0,
+            q1 * P1 - a0,
+            q2 * P0 - a0,
+            q2 * P1 - b0,
+            q2 * P2 + (a0 + a1),
+            q3 * P0 - b0,
+            q3 * P1 + a0,
+            q3 * P2 + (b0 + b1),
+            q3 * P3 - (a0 + a1),
+            q4 * P0,
+            q4 * P1,
+            q4 * P2 - a1,
+            q4 * P3 - b1,
+            q4 * P4 + a1,
+            q5 * P0,
+            q5 * P1,
+            q5 * P2 - b1,
+            q5 * P3 + a1,
+            q5 * P4 + b1,
+            q5 * P5 - a1)
 
 
 @njit(cache=True, inline="always")
@@ -188,12 +225,19 @@ def bending_lower(x, stiffness, kappa_bar, grad, hl):
     """`bending_terms` with the Hessian's lower triangle packed by rows into ``hl`` (21,)
     (row r, column c <= r at r (r + 1) / 2 + c): what the assembler scatters. Returns E (J)."""
     jet = _turning_jet(x)
+    energy, alpha, beta = bending_scales(jet, stiffness, kappa_bar)
+    _turning_lower(jet, alpha, beta, grad, hl)
+    return energy
+
+
+@njit(cache=True, inline="always")
+def bending_scales(jet, stiffness, kappa_bar):
+    """(E (J), dE/dphi, d2E/dphi2) of the bending energy at the `_turning_jet` ``jet``:
+    E = S/2 (kappa - kappa_bar)^2, dE/dphi = c k1, d2E/dphi2 = S k1^2 + c k2 (c = S dev)."""
     kappa, k1, k2 = jet[0], jet[1], jet[2]
     dev = kappa - kappa_bar
     c = stiffness * dev
-    # E = S/2 (kappa - kappa_bar)^2: dE/dphi = c k1, d2E/dphi2 = S k1^2 + c k2
-    _turning_lower(jet, c * k1, stiffness * k1 * k1 + c * k2, grad, hl)
-    return 0.5 * stiffness * dev * dev
+    return 0.5 * stiffness * dev * dev, c * k1, stiffness * k1 * k1 + c * k2
 
 
 @njit(cache=True)

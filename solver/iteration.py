@@ -30,28 +30,68 @@ from snapmorph.solver.assembly3d import apply_scaled_increment, assemble_system3
 from snapmorph.solver.banded import ldlt_factor_envelope, ldlt_solve_envelope
 
 
+@njit(cache=True, inline="always")
+def _larger(a, m):
+    """max(a, m) as the sequential scans take it (a NaN ``a`` is passed over)."""
+    return a if a > m else m
+
+
 @njit(cache=True)
 def _residual(grad, lam, P, R):
-    r_max = 0.0
-    for i in range(grad.shape[0]):
+    """R = grad - lam P; returns max |R_i|, or inf if any R_i is not finite. Four running
+    maxima (a maximum does not depend on the order it is taken in: the same value as one
+    scan, without waiting on each comparison)."""
+    n = grad.shape[0]
+    m0 = m1 = m2 = m3 = 0.0
+    finite = True
+    i = 0
+    while i + 4 <= n:
+        r0 = grad[i] - lam * P[i]
+        r1 = grad[i + 1] - lam * P[i + 1]
+        r2 = grad[i + 2] - lam * P[i + 2]
+        r3 = grad[i + 3] - lam * P[i + 3]
+        R[i] = r0
+        R[i + 1] = r1
+        R[i + 2] = r2
+        R[i + 3] = r3
+        a0 = abs(r0)
+        a1 = abs(r1)
+        a2 = abs(r2)
+        a3 = abs(r3)
+        finite &= a0 < np.inf and a1 < np.inf and a2 < np.inf and a3 < np.inf
+        m0 = _larger(a0, m0)
+        m1 = _larger(a1, m1)
+        m2 = _larger(a2, m2)
+        m3 = _larger(a3, m3)
+        i += 4
+    while i < n:
         R[i] = grad[i] - lam * P[i]
-        a = abs(R[i])
-        if not a < np.inf:  # NaN or inf
-            return np.inf
-        if a > r_max:
-            r_max = a
-    return r_max
+        a0 = abs(R[i])
+        finite &= a0 < np.inf
+        m0 = _larger(a0, m0)
+        i += 1
+    if not finite:  # NaN or inf
+        return np.inf
+    return _larger(m3, _larger(m2, _larger(m1, m0)))
 
 
 @njit(cache=True)
 def max_abs(du):
-    """Largest |du[i]| (the size of a correction, as the drivers measure it)."""
-    du_max = 0.0
-    for i in range(du.shape[0]):
-        a = abs(du[i])
-        if a > du_max:
-            du_max = a
-    return du_max
+    """Largest |du[i]| (the size of a correction, as the drivers measure it: a NaN entry is
+    passed over). Four running maxima, as `_residual`."""
+    n = du.shape[0]
+    m0 = m1 = m2 = m3 = 0.0
+    i = 0
+    while i + 4 <= n:
+        m0 = _larger(abs(du[i]), m0)
+        m1 = _larger(abs(du[i + 1]), m1)
+        m2 = _larger(abs(du[i + 2]), m2)
+        m3 = _larger(abs(du[i + 3]), m3)
+        i += 4
+    while i < n:
+        m0 = _larger(abs(du[i]), m0)
+        i += 1
+    return _larger(m3, _larger(m2, _larger(m1, m0)))
 
 
 @njit(cache=True)
