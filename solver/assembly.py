@@ -453,12 +453,11 @@ def load_record(full_dofs, forces, ref, dof_map):
 
 
 def total_energy(q, elements):
-    """Total elastic energy (J) of the positions ``q``: the assembler run with every DOF
-    marked fixed, so that nothing is scattered into a stiffness."""
-    dofs = tuple(-np.ones((conn.shape[0], 2 * conn.shape[1]), dtype=np.int64)
-                 for conn in (elements[0], elements[2], elements[4]))
-    return assemble_system(np.ascontiguousarray(q, dtype=float), elements, dofs,
-                           np.zeros((1, 1)), np.zeros(1), np.zeros(q.shape[0]))
+    """Total elastic energy (J) of the positions ``q``: the gradient-only assembler
+    (`assemble_gradient`, no stiffness) run with every DOF marked fixed."""
+    q = np.ascontiguousarray(q, dtype=float)
+    held = np.full(q.shape[0], -1, dtype=np.int64)
+    return assemble_gradient(q, elements, held, np.zeros(1), np.zeros(q.shape[0]))
 
 
 @njit(cache=True)

@@ -382,3 +382,70 @@ def mgdc_loop(q, lam, P, uP1, tol_force, tol_disp, max_iter, settle_factor, elem
         lam += dl
         iterations += 1
     return 3, max_iter, lam, du_max, du_prev, 0.0, False, iterations, neg, energy
+
+
+@njit(cache=True)
+def mgdc_step(q, lam, dlam, P, uP1, settings, weights, q_try, uP_try, step, elements, dofs,
+              slots, loads, dof_map, band, heights, grad, grad_full, work, pivot_tol):
+    """One MGDC step of planar rods in one call: the predictor from the converged state
+    ``q`` (K factorised there in ``band``) along ``uP1`` by the load increment ``dlam``,
+    with the second-order term (`second_order_term`) when asked, then `mgdc_loop` at the
+    load ``P``; on convergence also the tangent and the step of the new state. The driver's
+    Python path (`solver.mgdc._Mgdc._correct`, `_crosses`) in one call a step.
+
+    ``settings`` = (tol, force scale, load unit, tol_disp, max_iter, settle_factor,
+    bend_fraction, second_order (0/1)); ``weights`` = (n_free, r_idx, representative): the
+    pushed node's component of a reduced vector u is sum n_free u[r_idx], the reduced values
+    of a full state q are q[representative]. Writes the trial state into ``q_try``; on
+    convergence ``uP_try`` = K^-1 P there and ``step`` its reduced change from q.
+    Returns (status, it, lam, du_max, du_prev, r_max, done, iterations, negative_eigenvalues,
+    energy, tol_force, flex, step_norm) with the statuses of `mgdc_loop`; flex (uP_try's
+    pushed component) and step_norm (|q_try - q|) NaN unless converged."""
+    tol, fscale, unit, tol_disp, max_iter, settle_factor, bend_fraction, second_order = settings
+    n_free, r_idx, representative = weights
+    n = uP1.shape[0]
+    for j in range(q.shape[0]):
+        q_try[j] = q[j]
+    for j in range(q.shape[0]):
+        r = dof_map[j]
+        if r >= 0:
+            q_try[j] += dlam * uP1[r]
+    lam_try = lam + dlam
+    if second_order:
+        tangent = np.empty(n)
+        for i in range(n):
+            tangent[i] = dlam * uP1[i]
+        bend = np.empty(n)
+        mu, ok = second_order_term(q, tangent, uP1, elements, dofs, dof_map, band, heights,
+                                   bend_fraction, bend)
+        if ok:
+            for j in range(q.shape[0]):
+                r = dof_map[j]
+                if r >= 0:
+                    q_try[j] += bend[r]
+            lam_try += mu
+    tol_force = tol * max(fscale, abs(lam_try) * unit)
+    (status, it, lam_try, du_max, du_prev, r_max, done, iterations, neg,
+     energy) = mgdc_loop(q_try, lam_try, P, uP1, tol_force, tol_disp, max_iter,
+                         settle_factor, elements, dofs, slots, loads, dof_map, band, heights,
+                         grad, grad_full, work, pivot_tol)
+    flex = np.nan
+    size = np.nan
+    if status == 0:
+        rhs = np.empty((n, 1))
+        for i in range(n):
+            rhs[i, 0] = P[i]
+        ldlt_solve_envelope(band, heights, rhs)
+        for i in range(n):
+            uP_try[i] = rhs[i, 0]
+        flex = 0.0
+        for k in range(r_idx.shape[0]):
+            flex += n_free[k] * uP_try[r_idx[k]]
+        for i in range(n):
+            step[i] = q_try[representative[i]] - q[representative[i]]
+        size = 0.0
+        for j in range(q.shape[0]):
+            size += (q_try[j] - q[j]) ** 2
+        size = np.sqrt(size)
+    return (status, it, lam_try, du_max, du_prev, r_max, done, iterations, neg, energy,
+            tol_force, flex, size)

@@ -147,6 +147,14 @@ class _Mgdc:
         self.travelled = 0.0  # sum of |dd| along the path, m (wandering guard)
         self.arc = 0.0  # the path's length so far in the step norm (reduced DOFs), m
         self._trial = None  # (q_try, its reduced step, its flexibility) seen by `_crosses`
+        # a whole step in one compiled call where the system has it (`System.mgdc_step`)
+        self._settings = (float(self.tol), float(self.fscale), float(self.unit),
+                          float(self.tol_disp), int(self.max_iter), float(SETTLE_FACTOR),
+                          float(BEND_FRACTION), int(o["predictor"] == "second-order"))
+        self._weights = (np.ascontiguousarray(self._n_free, dtype=float),
+                         np.ascontiguousarray(self._r_idx, dtype=np.int64),
+                         np.ascontiguousarray(system.representative, dtype=np.int64))
+        self._fast = None  # (q_try, u_P, reduced step, flexibility, step norm) of that call
 
     def node_component(self, u):
         """The pushed node's component along the direction of a reduced vector ``u``."""
@@ -203,15 +211,20 @@ class _Mgdc:
                                f"d = {self.d:.6g} m, F = {self.lam * self.unit * self.fu:.6g} N")
                 return None
             q_try, lam_try, it, converged = self._correct(uP1)
+            fast, self._fast = self._fast, None
+            fast = fast if fast is not None and fast[0] is q_try else None
             # A corrector that wandered far from its predictor may have jumped to another
             # branch: reject the step and retry with half the size.
             # Too many iterations also means the predictor overshot a strongly curved path.
-            if converged and (system.step_norm(q_try, self.q) > 4.0 * self.s
-                              or it > o["max_accept_iter"]):
+            size = fast[4] if fast is not None else system.step_norm(q_try, self.q)
+            if converged and (size > 4.0 * self.s or it > o["max_accept_iter"]):
                 converged = False
             uP_try = None
+            if converged and fast is not None:  # the step's call solved the tangent
+                uP_try = fast[1]
+                self._trial = (q_try, fast[2], fast[3])
             if converged and self.monitor is not None and self.s > CROSSING_REFINE * self.s0:
-                uP_try = system.solve(self.P)
+                uP_try = system.solve(self.P) if uP_try is None else uP_try
                 converged = not self._crosses(uP_try, q_try)
             if converged:
                 return q_try, lam_try, it, uP_try
@@ -231,8 +244,22 @@ class _Mgdc:
         """One predictor along ``uP1`` and the MGDC corrector iterations from it. Returns
         (q_try, lam_try, iterations as step control counts them, converged)."""
         system, P, tol_disp = self.system, self.P, self.tol_disp
-        q_try = self.q.copy()
         dlam = self.sign * self.s / math.sqrt(float(uP1 @ uP1))
+        fast = system.mgdc_step(self.q, self.lam, dlam, P, uP1, self._settings,
+                                self._weights)
+        if fast is not None:  # the whole step in one call (planar rods)
+            q_try, uP_try, step, out = fast
+            status, start, lam_try, du_max, du_prev, r_max, done, iterations = out[:8]
+            tol_force, flex, size = out[10:]
+            self.total_iterations += iterations
+            if status == 0:
+                self._fast = (q_try, uP_try, step, flex, size)
+                return q_try, lam_try, counted(start, done, du_max, tol_disp, r_max,
+                                               tol_force), True
+            if status == 3:
+                return q_try, lam_try, start, False
+            return self._general(q_try, lam_try, uP1, tol_force, start, du_max, du_prev)
+        q_try = self.q.copy()
         lam_try = self.lam + dlam
         system.increment(q_try, uP1, dlam)
         if self.o["predictor"] == "second-order":
@@ -253,11 +280,20 @@ class _Mgdc:
                                                tol_force), True
             if status == 3:
                 return q_try, lam_try, start, False
+            return self._general(q_try, lam_try, uP1, tol_force, start, du_max, du_prev)
+        return self._general(q_try, lam_try, uP1, tol_force, 1, du_max, du_prev, fused=True)
+
+    def _general(self, q_try, lam_try, uP1, tol_force, start, du_max, du_prev, fused=False):
+        """The corrector iterations from iteration ``start`` in Python: the general path
+        (assemble, factorise with the dense fallback, solve apart) at ``start`` when a
+        compiled iteration failed there (``fused`` False), the fused iterations otherwise.
+        Returns what `_correct` returns."""
+        system, P, tol_disp = self.system, self.P, self.tol_disp
+        it = start
         for it in range(start, self.max_iter + 1):
             done = settled(du_max, du_prev, tol_disp)
-            fstat, r_max, du_step, dl = (1, 0.0, 0.0, 0.0) if looped is not None \
-                and it == start else system.fused_mgdc(q_try, lam_try, P, uP1,
-                                                       np.inf if done else tol_force)
+            fstat, r_max, du_step, dl = (1, 0.0, 0.0, 0.0) if not fused and it == start \
+                else system.fused_mgdc(q_try, lam_try, P, uP1, np.inf if done else tol_force)
             if fstat == 0:
                 return q_try, lam_try, counted(it, done, du_max, tol_disp, r_max,
                                                tol_force), True
@@ -310,9 +346,13 @@ class _Mgdc:
         """Would the converged trial state q_try (tangent ``uP = K^-1 P`` there) put a
         bifurcation or a jumped fold between itself and q (see CROSSING_REFINE)?"""
         system = self.system
-        flex = self.node_component(uP)
-        step = system.reduced(q_try) - system.reduced(self.q)
-        self._trial = (q_try, step, flex)  # what `_accept` needs of the same state
+        trial = self._trial
+        if trial is not None and trial[0] is q_try:  # (computed by the step's call)
+            step, flex = trial[1], trial[2]
+        else:
+            flex = self.node_component(uP)
+            step = system.reduced(q_try) - system.reduced(self.q)
+            self._trial = (q_try, step, flex)  # what `_accept` needs of the same state
         orient = 1.0 if float(uP @ step) >= 0.0 else -1.0
         return self.monitor.suspicious(held_count(system.negative_eigenvalues, flex),
                                        orient * (1.0 if flex >= 0.0 else -1.0))

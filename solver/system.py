@@ -26,7 +26,7 @@ from snapmorph.solver.banded import (band_to_dense, envelope_heights, ldlt_facto
 from snapmorph.solver.frames3d import canonical_twist_offset, reference_twist, transport_frames
 from snapmorph.solver.iteration import (mgdc_iteration, mgdc_iteration3d, newton_iteration,
                                         newton_iteration3d, newton_loop, second_order_term,
-                                        settle_state, mgdc_loop)
+                                        settle_state, mgdc_loop, mgdc_step)
 from snapmorph.solver.sparse import SparseLDLT, system_factorisation
 
 # A pivot smaller than this times the largest diagonal entry means K is numerically singular
@@ -242,6 +242,12 @@ class BandedSystem:
         r_max, done, iterations) (`solver.iteration.mgdc_loop`)."""
         return None
 
+    def mgdc_step(self, q, lam, dlam, P, uP1, settings, weights):
+        """A whole MGDC step (predictor, corrector, the new state's tangent) in one
+        compiled call, or None (the driver does it in Python). Returns (q_try, uP_try,
+        reduced step, the tuple of `solver.iteration.mgdc_step`)."""
+        return None
+
     @property
     def last_correction(self):
         """The reduced increment applied by the last `fused_newton` call that updated q."""
@@ -355,6 +361,20 @@ class ReducedSystem(BandedSystem):
         if it > 0 or status == 0:  # a fused iteration ran: its factor and counts stand
             self._after_fused(0, neg, energy)
         return status, it, du_max
+
+    def mgdc_step(self, q, lam, dlam, P, uP1, settings, weights):
+        """`BandedSystem.mgdc_step` compiled (`solver.iteration.mgdc_step`) where K's
+        factor at q is the band's own."""
+        if self.factorisation == "sparse" or self._dense_lu is not None \
+                or self._sparse_solves or self._splu is not None:
+            return None
+        q_try, uP_try, step = np.empty_like(q), np.empty(self.n), np.empty(self.n)
+        out = mgdc_step(q, lam, dlam, P, uP1, settings, weights, q_try, uP_try, step,
+                        *self._kernel_args)
+        status, it, neg, energy = out[0], out[1], out[8], out[9]
+        if status != 1 or it > 1:
+            self._after_fused(0 if status != 1 else 2, neg, energy)
+        return q_try, uP_try, step, out
 
     def mgdc_loop(self, q, lam, P, uP1, tol_force, tol_disp, max_iter, settle_factor):
         """`BandedSystem.mgdc_loop` compiled (`solver.iteration.mgdc_loop`)."""

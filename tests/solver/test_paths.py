@@ -528,10 +528,11 @@ def test_displacement_control_keeps_no_step_that_breaks_the_energy_balance(h_ove
 
 
 def test_compiled_corrector_loops_give_the_python_loops_bits():
-    """`System.newton_loop` and `System.mgdc_loop` (the fused iterations in one compiled
-    call, planar rods) against the drivers' own Python loops over `fused_newton` and
-    `fused_mgdc` (the systems' loops switched off): the same path, force and states, bit
-    for bit, through a limit point and a snap, and the same displacement-controlled solves."""
+    """`System.newton_loop`, `System.mgdc_loop` and `System.mgdc_step` (the fused
+    iterations, and a whole MGDC step, in one compiled call, planar rods) against the
+    drivers' own Python loops over `fused_newton` and `fused_mgdc` (the compiled calls
+    switched off): the same path, force and states, bit for bit, through a limit point and
+    a snap, and the same displacement-controlled solves."""
     from snapmorph.solver.states import DisplacementProbe
     from snapmorph.solver.system import BandedSystem, ReducedSystem
 
@@ -544,13 +545,15 @@ def test_compiled_corrector_loops_give_the_python_loops_bits():
         return path, solved
 
     compiled = run()
-    saved = ReducedSystem.newton_loop, ReducedSystem.mgdc_loop
-    ReducedSystem.newton_loop = BandedSystem.newton_loop
-    ReducedSystem.mgdc_loop = BandedSystem.mgdc_loop
+    names = ("newton_loop", "mgdc_loop", "mgdc_step")
+    saved = [getattr(ReducedSystem, name) for name in names]
+    for name in names:
+        setattr(ReducedSystem, name, getattr(BandedSystem, name))
     try:
         python = run()
     finally:
-        ReducedSystem.newton_loop, ReducedSystem.mgdc_loop = saved
+        for name, fn in zip(names, saved):
+            setattr(ReducedSystem, name, fn)
     (a, sa), (b, sb) = compiled, python
     assert a.status == b.status == "ok" and len(a) == len(b)
     assert np.array_equal(a.force, b.force) and np.array_equal(a.positions, b.positions)
