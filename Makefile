@@ -35,7 +35,7 @@ test-durations: $(STAMP)  ## run the whole suite and write each test's time into
 bench: $(STAMP)  ## print speed figures (solver, unit, pipeline)
 	$(PY) bench/run.py
 
-maps: $(STAMP)  ## build the default design map into maps/data/ (7452 points, ~3 min on 2 idle cores; no-op when up to date; MAPS_FLAGS=--force rebuilds)
+maps: $(STAMP)  ## build the default design map into maps/data/ (7452 points, ~1 min on 2 idle cores; no-op when up to date; MAPS_FLAGS=--force rebuilds)
 	$(PY) -m snapmorph maps build --grid default --out maps/data/default.nc $(if $(JOBS),--workers $(JOBS),) $(MAPS_FLAGS)
 
 maps-ci: $(STAMP)  ## build the small CI grid into maps/data/ci.nc (no-op when up to date)

@@ -22,19 +22,15 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
+from bench.timing import best_time  # noqa: E402
+
 REPS = int(os.environ.get("BENCH_REPS", "5000"))
 UNIT_RUNS = int(os.environ.get("BENCH_UNIT_RUNS", "20"))
 
 
 def best(fn, reps=REPS):
-    """The fastest of ``reps`` calls of ``fn`` (s)."""
-    fn()
-    t = np.inf
-    for _ in range(reps):
-        t0 = time.perf_counter()
-        fn()
-        t = min(t, time.perf_counter() - t0)
-    return t
+    """The fastest of ``reps`` calls of ``fn`` (s) (`bench.timing.best_time`)."""
+    return best_time(fn, reps)
 
 
 def specimen():

@@ -76,7 +76,8 @@ def main():
     med2, best2, _ = median_time(lambda: specimen_unit(check_self_standing=False))
     print(f"  the same without the self-standing check: median {med2*1e3:.1f} ms (best {best2*1e3:.1f} ms)")
 
-    for extra in ("bench_unit_path", "against_reference", "bench_pipeline", "bench_stability",
+    for extra in ("bench_unit_path", "against_reference", "bench_kernels", "bench_setup",
+                  "bench_pipeline", "bench_stability",
                   "bench_units3d", "bench_inverse", "bench_tolerance", "bench_rods3d", "bench_paths",
                   "bench_multishape", "bench_loads", "bench_sparse", "bench_sheet"):
         path = os.path.join(HERE, extra + ".py")
