@@ -56,7 +56,7 @@ figures: $(STAMP)  ## write the paper's figures into figures/ with a gallery pag
 	$(PY) -m snapmorph figures --out figures
 
 fuzz: $(STAMP)  ## 1,000 random unit geometries over the valid domain at 101 and 201 nodes (no hang, bistable = stable, no NaN, no monostable cut path, no flag flip)
-	$(PY) tests/units/fuzz_units.py --n 1000 --nodes 101 --compare 201 --time-limit 20 --every 25
+	$(PY) tests/units/fuzz_units.py --n 1000 --nodes 101 --compare 201 --time-limit 20 --every 25 --failures build/fuzz_failures.json
 
 test-nojit: $(STAMP)  ## run the kernel tests as plain Python (NUMBA_DISABLE_JIT=1), for debugging
 	NUMBA_DISABLE_JIT=1 $(PY) -m pytest -q tests/solver/test_energies.py tests/solver/test_banded.py

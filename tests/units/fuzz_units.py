@@ -187,6 +187,7 @@ def main(argv=None):
     if a.failures:
         import json
 
+        os.makedirs(os.path.dirname(os.path.abspath(a.failures)), exist_ok=True)
         with open(a.failures, "w") as fh:
             json.dump(failures, fh, indent=1)
         print(f"{len(failures)} failed simulations written to {a.failures}")
