@@ -121,11 +121,14 @@ class Recorder:
         self._fielded = bool(structure.state_fields(q0) or system.state_fields(q0))
 
     def add(self, d, F, q, E, it, neg, negd, rate=None):
-        st = self.structure
-        F, E = F * self.force_unit, E * self.force_unit
-        pos = np.array(st.positions_of(q), dtype=float, copy=True)
-        for k, v in zip(self.rows, (d, F, pos, E, it, neg, negd)):
-            self.rows[k].append(v)
+        st, rows = self.structure, self.rows
+        rows["d"].append(d)
+        rows["F"].append(F * self.force_unit)
+        rows["q"].append(np.array(st.positions_of(q), dtype=float, copy=True))
+        rows["E"].append(E * self.force_unit)
+        rows["it"].append(it)
+        rows["neg"].append(neg)
+        rows["negd"].append(negd)
         if self.rates is not None:
             self.rates.append(rate)
         if not self._fielded:
