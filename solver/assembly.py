@@ -264,29 +264,11 @@ def _clear_written(band, heights):
 
 
 @njit(cache=True)
-def assemble_banded(q, elements, dofs, slots, dof_map, band, heights, grad_red, grad_full):
-    """`assemble_system` into a Fortran-order band whose entries outside the envelope
-    ``heights`` (`solver.banded.envelope_heights`) are zero: only what the assembly and the
-    factor write (`solver.banded.written_extent`) is cleared. ``slots``: `band_slots` of
-    ``dofs`` for this band; ``dof_map`` the system's (full -> reduced DOF, -1 held).
-    Energy (J); writes the band, the reduced and the full gradient (N).
-
-    The same operations in the same order as `assemble_system` (the same bits): each
-    element's terms go from scalars straight to their slots, with no small arrays between
-    (whose reference counts cost more than the arithmetic)."""
-    stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
-    stretch_slots, bend_slots, spring_slots = slots
-    _clear_written(band, heights)
-    grad_full[:] = 0.0
-    flat = band.T.reshape(band.size)  # band[k, j] = flat[j ld + k]
-    energy = 0.0
-    # each kind in two passes: the elements' terms into ``jets``, then their scatter. In
-    # one pass the scatter waits on the long chain of each element's arithmetic and the
-    # processor cannot look far enough ahead to overlap the next element's (2.9 us of 12)
-    ne = stretch_nodes.shape[0]
-    nb = bend_nodes.shape[0]
-    jets = np.empty((max(ne, nb), 12))
-    for e in range(ne):
+def _stretch_jets(q, stretch_nodes, stretch_params, jets, energy):
+    """The stretching terms of every edge (`solver.energies.stretch_jet`) into ``jets``:
+    per edge (gx, gz, hxx, hxz, hzz); returns ``energy`` (J) plus theirs, added in edge
+    order (the assemblers' running sum)."""
+    for e in range(stretch_nodes.shape[0]):
         a = 2 * stretch_nodes[e, 0]
         b = 2 * stretch_nodes[e, 1]
         en, gx, gz, hxx, hxz, hzz = stretch_jet(q[a], q[a + 1], q[b], q[b + 1],
@@ -297,23 +279,21 @@ def assemble_banded(q, elements, dofs, slots, dof_map, band, heights, grad_red, 
         jets[e, 2] = hxx
         jets[e, 3] = hxz
         jets[e, 4] = hzz
-    for e in range(ne):
-        a = 2 * stretch_nodes[e, 0]
-        b = 2 * stretch_nodes[e, 1]
-        gx = jets[e, 0]
-        gz = jets[e, 1]
-        grad_full[a] += -gx
-        grad_full[a + 1] += -gz
-        grad_full[b] += gx
-        grad_full[b + 1] += gz
-        _put_pair(flat, stretch_slots[e], jets[e, 2], jets[e, 3], jets[e, 4])
-    # a stencil whose first edge is the last one's second (along a rod) takes its
-    # `edge_turn` from it (the same bits: one square root and two divisions fewer)
+    return energy
+
+
+@njit(cache=True)
+def _bending_jets(q, bend_nodes, bend_params, jets, energy):
+    """The bending terms of every stencil into ``jets``: per stencil (alpha = dE/dphi,
+    beta = d2E/dphi2, then the turning angle's P (6), u0, v0, u1, v1 of
+    `solver.energies.turning_jet_edges`); returns ``energy`` (J) plus theirs, added in
+    stencil order. A stencil whose first edge is the last one's second (along a rod) takes
+    its `edge_turn` from it (the same bits: one square root and two divisions fewer)."""
     last0 = -1
     last1 = -1
     a1 = b1 = 0.0
     t1 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    for e in range(nb):
+    for e in range(bend_nodes.shape[0]):
         n0 = bend_nodes[e, 0]
         n1 = bend_nodes[e, 1]
         n2 = bend_nodes[e, 2]
@@ -337,6 +317,44 @@ def assemble_banded(q, elements, dofs, slots, dof_map, band, heights, grad_red, 
         jets[e, 1] = beta
         for k in range(3, 13):  # P (6), u0, v0, u1, v1
             jets[e, k - 1] = jet[k]
+    return energy
+
+
+@njit(cache=True)
+def assemble_banded(q, elements, dofs, slots, dof_map, band, heights, grad_red, grad_full):
+    """`assemble_system` into a Fortran-order band whose entries outside the envelope
+    ``heights`` (`solver.banded.envelope_heights`) are zero: only what the assembly and the
+    factor write (`solver.banded.written_extent`) is cleared. ``slots``: `band_slots` of
+    ``dofs`` for this band; ``dof_map`` the system's (full -> reduced DOF, -1 held).
+    Energy (J); writes the band, the reduced and the full gradient (N).
+
+    The same operations in the same order as `assemble_system` (the same bits): each
+    element's terms go from scalars straight to their slots, with no small arrays between
+    (whose reference counts cost more than the arithmetic)."""
+    stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
+    stretch_slots, bend_slots, spring_slots = slots
+    _clear_written(band, heights)
+    grad_full[:] = 0.0
+    flat = band.T.reshape(band.size)  # band[k, j] = flat[j ld + k]
+    energy = 0.0
+    # each kind in two passes: the elements' terms into ``jets``, then their scatter. In
+    # one pass the scatter waits on the long chain of each element's arithmetic and the
+    # processor cannot look far enough ahead to overlap the next element's (2.9 us of 12)
+    ne = stretch_nodes.shape[0]
+    nb = bend_nodes.shape[0]
+    jets = np.empty((max(ne, nb), 12))
+    energy = _stretch_jets(q, stretch_nodes, stretch_params, jets, energy)
+    for e in range(ne):
+        a = 2 * stretch_nodes[e, 0]
+        b = 2 * stretch_nodes[e, 1]
+        gx = jets[e, 0]
+        gz = jets[e, 1]
+        grad_full[a] += -gx
+        grad_full[a + 1] += -gz
+        grad_full[b] += gx
+        grad_full[b + 1] += gz
+        _put_pair(flat, stretch_slots[e], jets[e, 2], jets[e, 3], jets[e, 4])
+    energy = _bending_jets(q, bend_nodes, bend_params, jets, energy)
     for e in range(nb):
         i0 = 2 * bend_nodes[e, 0]
         i1 = 2 * bend_nodes[e, 1]
@@ -469,47 +487,24 @@ def assemble_gradient(q, elements, dof_map, grad_red, grad_full):
     stretch_nodes, stretch_params, bend_nodes, bend_params, spring_nodes, spring_params = elements
     grad_full[:] = 0.0
     energy = 0.0
-    # as `assemble_banded` computes them (scalars, edges shared along a rod), in one pass
+    # the terms as `assemble_banded` computes them (`_stretch_jets`, `_bending_jets`), their
+    # gradients added in the same order
+    jets = np.empty((max(stretch_nodes.shape[0], bend_nodes.shape[0]), 12))
+    energy = _stretch_jets(q, stretch_nodes, stretch_params, jets, energy)
     for e in range(stretch_nodes.shape[0]):
         a = 2 * stretch_nodes[e, 0]
         b = 2 * stretch_nodes[e, 1]
-        en, gx, gz, _, _, _ = stretch_jet(q[a], q[a + 1], q[b], q[b + 1],
-                                          stretch_params[e, 0], stretch_params[e, 1])
-        energy += en
-        grad_full[a] += -gx
-        grad_full[a + 1] += -gz
-        grad_full[b] += gx
-        grad_full[b + 1] += gz
-    last0 = -1
-    last1 = -1
-    a1 = b1 = 0.0
-    t1 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        grad_full[a] += -jets[e, 0]
+        grad_full[a + 1] += -jets[e, 1]
+        grad_full[b] += jets[e, 0]
+        grad_full[b + 1] += jets[e, 1]
+    energy = _bending_jets(q, bend_nodes, bend_params, jets, energy)
     for e in range(bend_nodes.shape[0]):
-        n0 = bend_nodes[e, 0]
-        n1 = bend_nodes[e, 1]
-        n2 = bend_nodes[e, 2]
-        if n0 == last0 and n1 == last1:
-            a0 = a1
-            b0 = b1
-            t0 = t1
-        else:
-            a0 = q[2 * n1] - q[2 * n0]
-            b0 = q[2 * n1 + 1] - q[2 * n0 + 1]
-            t0 = edge_turn(a0, b0)
-        a1 = q[2 * n2] - q[2 * n1]
-        b1 = q[2 * n2 + 1] - q[2 * n1 + 1]
-        t1 = edge_turn(a1, b1)
-        last0 = n1
-        last1 = n2
-        jet = turning_jet_edges(a0, b0, t0, a1, b1, t1)
-        en, alpha, _ = bending_scales(jet, bend_params[e, 0], bend_params[e, 1])
-        energy += en
-        grad_full[2 * n0] += alpha * jet[3]
-        grad_full[2 * n0 + 1] += alpha * jet[4]
-        grad_full[2 * n1] += alpha * jet[5]
-        grad_full[2 * n1 + 1] += alpha * jet[6]
-        grad_full[2 * n2] += alpha * jet[7]
-        grad_full[2 * n2 + 1] += alpha * jet[8]
+        alpha = jets[e, 0]
+        for c in range(3):
+            i = 2 * bend_nodes[e, c]
+            grad_full[i] += alpha * jets[e, 2 + 2 * c]
+            grad_full[i + 1] += alpha * jets[e, 3 + 2 * c]
     for e in range(spring_nodes.shape[0]):
         a = 2 * spring_nodes[e, 0]
         b = 2 * spring_nodes[e, 1]
