@@ -199,13 +199,15 @@ def apex_stiffness(structure, state, node, direction=UP, system=None) -> float:
 
 
 # ---------------------------------------------------------------------------- snap-back
-def snap_back(model, released, distance, steps=60, push_options=None, failures=()):
+def snap_back(model, released, distance, steps=60, push_options=None, failures=(),
+              tol=2e-3):
     """The snap-back load of a released unit: its base on the rollers (``model``: the unit
     built without the actuator, rollers on, its base middle held in x), state (iii)
     ``released`` (positions, actuator and supports removed) placed on the rollers, the apex
     pushed up (+z) by MGDC over ``distance`` (m) until F has passed its first maximum.
     ``push_options``: more options of the push (`solver.mgdc.follow_mgdc`: the predictor,
-    the path's tolerance, a time limit). Returns (F_back N, d at it m, stiffness N/m at the
+    the path's tolerance, a time limit); ``tol``: the peak search's bracket, a fraction of
+    the samples' spacing (`push_through.refine_peak`). Returns (F_back N, d at it m, stiffness N/m at the
     start, the path); F_back NaN when F has no maximum on the push (a failure of the path
     included)."""
     from snapmorph.units.push_through import first_peak, refine_peak
@@ -228,7 +230,7 @@ def snap_back(model, released, distance, steps=60, push_options=None, failures=(
         return NAN, NAN, stiffness, path
     probe = DisplacementProbe(st, model.apex, UP)
     F_back, d_back, _ = refine_peak(probe, d, F, np.asarray(path.positions), i,
-                                    (ConvergenceError, *failures), rates=path.rates)
+                                    (ConvergenceError, *failures), tol, path.rates)
     return F_back, d_back, stiffness, path
 
 
