@@ -161,13 +161,13 @@ class _Mgdc:
         return float(self._n_free @ u[self._r_idx])
 
     def _rate(self, flex):
-        """dq/dd at the current state as the recorder keeps it, (u_P, 1 / flex), from the
-        tangent u_P = K^-1 P whose pushed component is ``flex``: along the path u = lam'
-        u_P, d' = lam' flex, so dq/dd = W u_P / flex; None where d does not move with the
-        load (a limit of d)."""
+        """dq/dd and dF/dd at the current state as the recorder keeps them, (u_P, 1 / flex,
+        stiffness), from the tangent u_P = K^-1 P whose pushed component is ``flex``: along
+        the path u = lam' u_P, d' = lam' flex, so dq/dd = W u_P / flex and dF/dd = (N per
+        unit of lam) / flex; None where d does not move with the load (a limit of d)."""
         if not (abs(flex) > 0.0 and np.isfinite(flex)):  # (u_P itself is a finite solve)
             return None
-        return self.uP, 1.0 / flex
+        return self.uP, 1.0 / flex, self.unit_N / flex
 
     def run(self):
         """Step until the target displacement (or a stop); returns the `Path`."""

@@ -33,7 +33,9 @@ class Path:
     rates: (K, n_nodes, dim) m/m, dq/dd: how the positions change with the pushed node's
     displacement at each state (NaN rows where it is not known, e.g. at a critical point),
     or None when the driver gives none (displacement control; 3-D rods). The probes'
-    searches between states take their first guesses from them (`solver.states.between`).
+    searches between states take their first guesses from them (`solver.states.between`);
+    stiffness: (K,) N/m, dF/dd, the pushed node's tangent stiffness along the path at each
+    state (NaN where not known), where ``rates`` are given.
     """
 
     displacement: np.ndarray
@@ -51,6 +53,7 @@ class Path:
     load_factor: np.ndarray | None = None
     limit_load_factor: float | None = None
     rates: np.ndarray | None = None
+    stiffness: np.ndarray | None = None
 
     @property
     def twist(self) -> np.ndarray:
@@ -103,9 +106,9 @@ class Recorder:
     """Collects the converged states of a path (through the structure's interface only).
     Forces and energies come in the driver system's units and are kept in N and J
     (``force_unit``: see `solver.problem.driver_system`). ``rates``: keep each state's
-    dq/dd as the path's ``rates`` (the ``rate`` of `add`: (u, c), dq/dd = c W u for a
-    reduced vector u of the system, None where unknown; mapped to positions once, when the
-    path is made)."""
+    dq/dd as the path's ``rates`` (the ``rate`` of `add`: (u, c, k), dq/dd = c W u for a
+    reduced vector u of the system, k = dF/dd N/m, the path's ``stiffness``; None where
+    unknown; mapped to positions once, when the path is made)."""
 
     def __init__(self, structure, force_unit, system, rates=False):
         self.structure = structure
@@ -164,6 +167,8 @@ class Recorder:
             critical_points=list(critical_points),
             fields={k: np.array(v) for k, v in self.fields.items()},
             rates=self._rates(),
+            stiffness=None if self.rates is None else np.array(
+                [np.nan if r is None else r[2] for r in self.rates], dtype=float),
         )
 
     def _rates(self):

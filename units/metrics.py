@@ -214,9 +214,10 @@ def snap_back(model, released, distance, steps=60, push_options=None, failures=(
     from snapmorph.solver.states import DisplacementProbe
 
     st = model.structure
+    # (an equilibrium already: the released state is one, moved rigidly onto rollers that
+    # carry nothing; the push polishes it by Newton, and its first state's dF/dd is the
+    # stiffness there)
     start = on_rollers(released, model.supports, st.reference_positions)
-    start, _ = st.solve_equilibrium(start, node=None)
-    stiffness = apex_stiffness(st, start, model.apex, UP)
 
     def past_peak(rows):
         return first_peak(rows["F"]) is not None
@@ -224,6 +225,9 @@ def snap_back(model, released, distance, steps=60, push_options=None, failures=(
     options = dict(push_options or {})
     path = st.push(model.apex, UP, _reach(st, start, model.apex, distance), start=start,
                    steps=steps, stop=past_peak, critical=False, **options)
+    stiffness = float(path.stiffness[0]) if path.stiffness is not None and len(path) \
+        and np.isfinite(path.stiffness[0]) else apex_stiffness(st, path.positions[0],
+                                                               model.apex, UP)
     d, F = np.asarray(path.displacement), np.asarray(path.force)
     i = first_peak(F)
     if i is None:

@@ -520,7 +520,8 @@ def _head(path, stop, start=0):
         negative_eigenvalues_displacement=path.negative_eigenvalues_displacement[rows],
         critical_points=[c for c in path.critical_points if lo <= c.d <= hi],
         fields={k: v[rows] for k, v in path.fields.items()},
-        rates=None if path.rates is None else path.rates[rows])
+        rates=None if path.rates is None else path.rates[rows],
+        stiffness=None if path.stiffness is None else path.stiffness[rows])
 
 
 def _joined(path, more, status):
@@ -534,11 +535,15 @@ def _joined(path, more, status):
     info["pushed_on"] = {"from_d": float(path.displacement[-1]), "method": more.method,
                          "status": more.status}
     fields = {k: cat(v, more.fields[k]) for k, v in path.fields.items() if k in more.fields}
-    rates = None
-    if path.rates is not None or more.rates is not None:  # NaN where one has none
-        unknown = np.full(np.shape(more.positions), np.nan)
-        rates = cat(np.full(np.shape(path.positions), np.nan) if path.rates is None
-                    else path.rates, unknown if more.rates is None else more.rates)
+    def known(name, shape):  # a per-state array of both (NaN where one has none), or None
+        a, b = getattr(path, name), getattr(more, name)
+        if a is None and b is None:
+            return None
+        return cat(np.full(shape(path), np.nan) if a is None else a,
+                   np.full(shape(more), np.nan) if b is None else b)
+
+    rates = known("rates", lambda p: np.shape(p.positions))
+    stiffness = known("stiffness", lambda p: np.shape(p.displacement))
     return dataclasses.replace(
         path, displacement=cat(path.displacement, more.displacement),
         force=cat(path.force, more.force), positions=cat(path.positions, more.positions),
@@ -548,7 +553,7 @@ def _joined(path, more, status):
         negative_eigenvalues_displacement=cat(path.negative_eigenvalues_displacement,
                                               more.negative_eigenvalues_displacement),
         info=info, critical_points=list(path.critical_points) + list(more.critical_points),
-        fields=fields, rates=rates)
+        fields=fields, rates=rates, stiffness=stiffness)
 
 
 def _simulate(g, model, push, check_self_standing, deadline=None):

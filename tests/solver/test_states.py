@@ -175,3 +175,26 @@ def test_probe_settles_on_the_last_iterate_and_reads_the_same_force():
     for settle, (q, F, _, it) in ((True, (q1, F1, None, it1)), (False, (q0, F0, None, it0))):
         qc, Fc, calls, itc = solve(settle, True)
         assert calls == [] and itc == it and np.array_equal(qc, q) and Fc == F
+
+
+def test_mgdc_path_stiffness_is_the_apex_stiffness_of_its_states():
+    """`Path.stiffness` (dF/dd from the tangent, N/m) against the tangent stiffness of the
+    same states computed apart (1 / (e^T K^-1 e) for a force on the pushed node,
+    `units.metrics.apex_stiffness`), before the force peak and after it (negative)."""
+    from snapmorph.solver import Structure
+    from snapmorph.units.metrics import apex_stiffness
+
+    x = np.linspace(0.0, 0.1, 41)
+    st = Structure()
+    rod = st.add_rod(np.stack([x, 0.01 * np.sin(np.pi * x / 0.1)], 1), 5e-3, 0.5e-3, 2.2e9)
+    for node in (0, 1, 39, 40):
+        st.fix(int(rod.nodes[node]), "xz")
+    apex = int(rod.nodes[20])
+    st.fix(apex, "x")
+    path = st.push(apex, (0.0, -1.0), 0.015, steps=40)
+    assert path.stiffness is not None and path.stiffness.shape == path.force.shape
+    k_peak = int(np.argmax(path.force))
+    for k in (0, k_peak // 2, k_peak + 3):
+        want = apex_stiffness(st, path.positions[k], apex, (0.0, -1.0))
+        assert path.stiffness[k] == pytest.approx(want, rel=1e-9)
+    assert path.stiffness[k_peak + 3] < 0.0 < path.stiffness[0]
