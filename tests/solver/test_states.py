@@ -100,12 +100,10 @@ def test_hermite_guess_is_fourth_order_and_falls_back_on_unknown_slopes():
     assert np.all(orders > 3.6), orders
 
 
-def test_mgdc_path_rates_are_the_derivative_of_the_positions_along_d():
-    """`Path.rates` (dq/dd from the tangent K^-1 P) against central differences of two
-    displacement-controlled solves at d +- delta, on a clamped arch's snap path: before and
-    after the force peak and past the snap (where F < 0)."""
+def _clamped_arch_snap_path():
+    """(structure, apex, MGDC path) of a clamped shallow arch (L 100 mm, h 10 mm, 41 nodes)
+    pushed down 15 mm at its apex in 40 steps: through its force peak and its snap."""
     from snapmorph.solver import Structure
-    from snapmorph.solver.states import DisplacementProbe
 
     x = np.linspace(0.0, 0.1, 41)
     st = Structure()
@@ -115,6 +113,16 @@ def test_mgdc_path_rates_are_the_derivative_of_the_positions_along_d():
     apex = int(rod.nodes[20])
     st.fix(apex, "x")
     path = st.push(apex, (0.0, -1.0), 0.015, steps=40)
+    return st, apex, path
+
+
+def test_mgdc_path_rates_are_the_derivative_of_the_positions_along_d():
+    """`Path.rates` (dq/dd from the tangent K^-1 P) against central differences of two
+    displacement-controlled solves at d +- delta, on a clamped arch's snap path: before and
+    after the force peak and past the snap (where F < 0)."""
+    from snapmorph.solver.states import DisplacementProbe
+
+    st, apex, path = _clamped_arch_snap_path()
     assert path.rates is not None and path.rates.shape == path.positions.shape
     probe = DisplacementProbe(st, apex)
     delta = 1e-6
@@ -181,17 +189,9 @@ def test_mgdc_path_stiffness_is_the_apex_stiffness_of_its_states():
     """`Path.stiffness` (dF/dd from the tangent, N/m) against the tangent stiffness of the
     same states computed apart (1 / (e^T K^-1 e) for a force on the pushed node,
     `units.metrics.apex_stiffness`), before the force peak and after it (negative)."""
-    from snapmorph.solver import Structure
     from snapmorph.units.metrics import apex_stiffness
 
-    x = np.linspace(0.0, 0.1, 41)
-    st = Structure()
-    rod = st.add_rod(np.stack([x, 0.01 * np.sin(np.pi * x / 0.1)], 1), 5e-3, 0.5e-3, 2.2e9)
-    for node in (0, 1, 39, 40):
-        st.fix(int(rod.nodes[node]), "xz")
-    apex = int(rod.nodes[20])
-    st.fix(apex, "x")
-    path = st.push(apex, (0.0, -1.0), 0.015, steps=40)
+    st, apex, path = _clamped_arch_snap_path()
     assert path.stiffness is not None and path.stiffness.shape == path.force.shape
     k_peak = int(np.argmax(path.force))
     for k in (0, k_peak // 2, k_peak + 3):
