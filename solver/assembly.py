@@ -371,19 +371,27 @@ def assemble_banded(q, elements, dofs, slots, dof_map, band, heights, grad_red, 
         grad_full[i2 + 1] += alpha * jet[8]
         _put_lower21(flat, bend_slots[e], turning_lower(jet, alpha, beta))
     for e in range(spring_nodes.shape[0]):
-        a = 2 * spring_nodes[e, 0]
-        b = 2 * spring_nodes[e, 1]
-        k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
-        dx = q[a] - q[b] - ox
-        dz = q[a + 1] - q[b + 1] - oz
-        energy += 0.5 * k * (dx * dx + dz * dz)
-        grad_full[a] += k * dx
-        grad_full[a + 1] += k * dz
-        grad_full[b] += -k * dx
-        grad_full[b + 1] += -k * dz
+        k = spring_params[e, 0]
+        energy += _spring_gradient(q, spring_nodes, spring_params, e, grad_full)
         _put_pair(flat, spring_slots[e], k, 0.0, k)
     _reduce_gradient(dof_map, grad_full, grad_red)
     return energy
+
+
+@njit(cache=True, inline="always")
+def _spring_gradient(q, spring_nodes, spring_params, e, grad_full):
+    """Tie spring ``e``'s gradient (N) added into the full gradient at the full state
+    ``q``; returns its energy (J). The full and the gradient-only assembly's spring term."""
+    a = 2 * spring_nodes[e, 0]
+    b = 2 * spring_nodes[e, 1]
+    k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
+    dx = q[a] - q[b] - ox
+    dz = q[a + 1] - q[b + 1] - oz
+    grad_full[a] += k * dx
+    grad_full[a + 1] += k * dz
+    grad_full[b] += -k * dx
+    grad_full[b + 1] += -k * dz
+    return 0.5 * k * (dx * dx + dz * dz)
 
 
 @njit(cache=True, inline="always")
@@ -506,15 +514,6 @@ def assemble_gradient(q, elements, dof_map, grad_red, grad_full):
             grad_full[i] += alpha * jets[e, 2 + 2 * c]
             grad_full[i + 1] += alpha * jets[e, 3 + 2 * c]
     for e in range(spring_nodes.shape[0]):
-        a = 2 * spring_nodes[e, 0]
-        b = 2 * spring_nodes[e, 1]
-        k, ox, oz = spring_params[e, 0], spring_params[e, 1], spring_params[e, 2]
-        dx = q[a] - q[b] - ox
-        dz = q[a + 1] - q[b + 1] - oz
-        energy += 0.5 * k * (dx * dx + dz * dz)
-        grad_full[a] += k * dx
-        grad_full[a + 1] += k * dz
-        grad_full[b] += -k * dx
-        grad_full[b + 1] += -k * dz
+        energy += _spring_gradient(q, spring_nodes, spring_params, e, grad_full)
     _reduce_gradient(dof_map, grad_full, grad_red)
     return energy
