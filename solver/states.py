@@ -7,6 +7,8 @@ when a load-controlled Newton from a rough guess would wander off to another equ
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import scipy.optimize
 
@@ -97,21 +99,25 @@ def refine_maximum(probe, d, F, positions, i, tol_d=None, rates=None):
     # F is smooth on the branch between the samples: a solve that lands further from the
     # samples' line than twice their own variation has jumped to another equilibrium (its
     # force can be 50 % off), and the search is abandoned (the caller falls back)
-    spread = float(np.max(np.abs(np.diff(Fs)))) + 1e-9 * float(np.max(np.abs(Fs)))
+    F0, F1, F2 = (float(v) for v in Fs)  # (three numbers: no array passes)
+    spread = max(abs(F1 - F0), abs(F2 - F1)) + 1e-9 * max(abs(F0), abs(F1), abs(F2))
     samples = [np.asarray(positions[j], dtype=float) for j in range(i - 1, i + 2)]
     slopes = None if rates is None else [np.asarray(rates[j], dtype=float)
                                           for j in range(i - 1, i + 2)]
     if slopes is not None:  # a row not known (NaN) is None: `between` goes without it
-        slopes = [r if np.all(np.isfinite(r)) else None for r in slopes]
+        slopes = [r if np.isfinite(r).all() else None for r in slopes]
 
     solved = {}  # d -> the solve's positions, when they are of the samples' kind
+    interpolated = {}  # d -> the interpolant there (the guess of the solve at d)
 
     def guess(x):
-        g = between(ds, samples, slopes, x)
+        g = interpolated[x] = between(ds, samples, slopes, x)
         if solved:
             x0 = min(solved, key=lambda v: abs(v - x))
-            if abs(x - x0) < float(np.min(np.abs(ds - x))):
-                return solved[x0] + (g - between(ds, samples, slopes, x0))
+            if abs(x - x0) < min(abs(float(v) - x) for v in ds):
+                g0 = interpolated.get(x0)
+                g0 = between(ds, samples, slopes, x0) if g0 is None else g0
+                return solved[x0] + (g - g0)
         return g
 
     def f(x):
@@ -220,7 +226,7 @@ def _polynomial_maximum(pts, lo, hi):
         disc = B * B - 4.0 * A * C
         if disc < 0.0:
             return None
-        q = -0.5 * (B + np.copysign(np.sqrt(disc), B))
+        q = -0.5 * (B + math.copysign(math.sqrt(disc), B))
         roots = [q / A] + ([C / q] if q != 0.0 else [])
     top = (pts[max(range(len(y)), key=y.__getitem__)][0] - x0) / scale
     maxima = [r for r in roots if 2.0 * A * r + B < 0.0 and lo < x0 + r * scale < hi]
@@ -249,7 +255,7 @@ def hermite(d0, d1, q0, q1, r0, r1, x):
     its slopes dq/dd there (r0, r1): off by O((d1 - d0)^4) on a smooth branch; None where a
     slope is None or not finite (or d0 = d1)."""
     h = float(d1) - float(d0)
-    if h == 0.0 or r0 is None or r1 is None or not np.isfinite(np.sum(r0) + np.sum(r1)):
+    if h == 0.0 or r0 is None or r1 is None or not math.isfinite(float(np.sum(r0) + np.sum(r1))):
         return None
     t = (float(x) - float(d0)) / h
     h00, h01 = (1.0 + 2.0 * t) * (1.0 - t) ** 2, t * t * (3.0 - 2.0 * t)

@@ -549,13 +549,30 @@ class Structure(ConstrainedStructure):
         return memo[1][key]
 
     def _build_ordering(self, extra_fixed, elements):
-        """((dof_map, n_reduced, bandwidth), layout) of `_ordering`."""
+        """((dof_map, n_reduced, bandwidth), layout) of `_ordering`: remembered for the last
+        few inputs across structures (`_LAYOUT_MEMO`: every unit of one resolution, and its
+        released and snap-back variants, has the same graph and held components)."""
         rep, fixed = self._held(extra_fixed)
-        group, n_groups = node_groups(rep)
+        fixed = np.ascontiguousarray(fixed, dtype=np.bool_)
         conns = tuple(np.ascontiguousarray(elements[i], dtype=np.int64) for i in (0, 2, 4))
+        key = (rep.tobytes(), fixed.tobytes(),
+               *(c.tobytes() + bytes(str(c.shape), "ascii") for c in conns))
+        for k, built in _LAYOUT_MEMO:
+            if k == key:
+                return built
+        built = self._new_ordering(rep, fixed, conns)
+        _LAYOUT_MEMO.append((key, built))
+        del _LAYOUT_MEMO[:-_LAYOUT_MEMO_SIZE]
+        return built
+
+    @staticmethod
+    def _new_ordering(rep, fixed, conns):
+        """`_build_ordering` computed: the node groups of the supernodes ``rep``, their RCM
+        order and the layout (`_ordering_layout`) with the held components ``fixed``."""
+        group, n_groups = node_groups(rep)
         order = _rcm_order(group, n_groups, conns)
-        out = _ordering_layout(group, np.ascontiguousarray(fixed, dtype=np.bool_),
-                               np.ascontiguousarray(order, dtype=np.int64), *conns)
+        out = _ordering_layout(group, fixed, np.ascontiguousarray(order, dtype=np.int64),
+                               *conns)
         dof_map, k, bw, dofs, heights, slots, representative = \
             out[0], out[1], out[2], out[3:6], out[6], out[7:10], out[10]
         if k == 0:
@@ -758,6 +775,11 @@ def _ordering_layout(group, fixed, order, stretch, bend, spring):
             representative[dof_map[j]] = j  # the last full DOF of a reduced one
     return dof_map, k, bw, ds, db, dp, heights, ss, sb, sp, representative
 
+
+#: `Structure._build_ordering`'s memory: (key, ordering and layout) of the last ones built
+#: (the key holds the bytes of the supernodes, the held components and the connectivity)
+_LAYOUT_MEMO: list = []
+_LAYOUT_MEMO_SIZE = 8
 
 #: `_rcm_order`'s memory: (key, order) of the last orderings computed (a unit's pushes,
 #: probes, released and snap-back structures share their graphs)

@@ -32,17 +32,23 @@ def surface_strain(P, X, t):
     strain searches evaluate it once per solve.)"""
     P, X = np.asarray(P, float), np.ascontiguousarray(X, dtype=float)
     n = X.shape[0]
-    t = np.asarray(t, float)
-    if t.ndim == 0:
-        t_node = np.full(n, float(t))
-    else:
-        t = np.broadcast_to(t, (n - 1, 2))
-        t_node = np.zeros(n)
-        t_node[1:-1] = 0.5 * (t[:-1, 1] + t[1:, 0])
     flat = np.ascontiguousarray(P.reshape(-1, n, 2))
     out = np.empty(flat.shape[:2])
-    _surface_strain(flat, X, t_node, out)
+    _surface_strain(flat, X, _node_thickness(t, n), out)
     return out.reshape(P.shape[:-1])
+
+
+def _node_thickness(t, n):
+    """(n,) the thickness (m) at each node of a rod of n nodes: ``t`` one number, or per half
+    edge (n - 1, 2) (an interior node's is the mean of its two half edges'; the ends' 0,
+    unused)."""
+    t = np.asarray(t, float)
+    if t.ndim == 0:
+        return np.full(n, float(t))
+    t = np.broadcast_to(t, (n - 1, 2))
+    t_node = np.zeros(n)
+    t_node[1:-1] = 0.5 * (t[:-1, 1] + t[1:, 0])
+    return t_node
 
 
 @njit(cache=True)
@@ -105,6 +111,30 @@ def largest_strain(positions, X, rods, t):
     return top, best[1], best[2], state, series
 
 
+class _StateStrain:
+    """The largest surface strain of one state (`largest_strain`'s value alone), with each
+    rod's stress-free positions and node thicknesses taken once: the strain search
+    (`strain_on_path`) reads it at every solve."""
+
+    def __init__(self, X, rods, t):
+        self.parts = []
+        for nodes in rods.values():
+            Xr = np.ascontiguousarray(np.asarray(X, float)[nodes])
+            self.parts.append((np.asarray(nodes), Xr, _node_thickness(t, Xr.shape[0])))
+
+    def __call__(self, positions):
+        P = np.asarray(positions, float)
+        top = -np.inf
+        for nodes, Xr, t_node in self.parts:
+            out = np.empty((1, Xr.shape[0]))
+            _surface_strain(np.ascontiguousarray(P[nodes])[None], Xr, t_node, out)
+            m = float(out.max())
+            if m != m:  # NaN: as np.max, it wins
+                return m
+            top = m if m > top else top
+        return top
+
+
 class _Reading:
     """A displacement probe whose solves report ``read(positions, F)`` instead of the force
     F (the largest strain of the state, or -F: a minimum of F is a maximum of -F), for the
@@ -138,8 +168,8 @@ def strain_on_path(probe, d, series, positions, k, X, rods, t, failures, tol=2e-
     the specimen-class units' strain came out up to 1.7 % low."""
     from snapmorph.units.push_through import refine_peak
 
-    strained = None if probe is None else _Reading(
-        probe, lambda pos, F: largest_strain(pos, X, rods, t)[0])
+    strain = _StateStrain(X, rods, t)
+    strained = None if probe is None else _Reading(probe, lambda pos, F: strain(pos))
     value = refine_peak(strained, d, series, positions, k, failures, tol, rates)[0]
     return max(float(series[k]), float(value))
 
