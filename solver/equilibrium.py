@@ -14,7 +14,8 @@ def equilibrium(structure, positions, node, direction, force, tol=1e-9, max_iter
     ``force`` (N) on ``node`` along ``direction`` (no load when ``node`` is None).
 
     Returns (positions (n_nodes, dim), info dict: "iterations", "energy" (J),
-    "negative_eigenvalues", "state" (the full state)). Raises ConvergenceError when Newton
+    "negative_eigenvalues", "state" (the full state), "system" (the reduced system, holding
+    K assembled and factorised at that state)). Raises ConvergenceError when Newton
     fails."""
     q = state_from(structure, positions)
     force = real_scalar(force, "force", "N")
@@ -41,5 +42,6 @@ def equilibrium(structure, positions, node, direction, force, tol=1e-9, max_iter
         "energy": system.energy,
         "negative_eigenvalues": system.negative_eigenvalues,
         "state": q,
+        "system": system,
     }
     return structure.positions_of(q), info

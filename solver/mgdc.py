@@ -146,7 +146,10 @@ class _Mgdc:
         self.total_iterations = 0
         self.travelled = 0.0  # sum of |dd| along the path, m (wandering guard)
         self.arc = 0.0  # the path's length so far in the step norm (reduced DOFs), m
-        self._trial = None  # (q_try, its reduced step, its flexibility) seen by `_crosses`
+        # (q_try, its reduced step, its flexibility[, orientation, held count]) of the trial
+        # state, as `_crosses` and `_accept` need them (computed once a step)
+        self._trial = None
+        self._orient = None  # (u_P, step, sign of u_P . step) last computed, for `run`
         # a whole step in one compiled call where the system has it (`System.mgdc_step`)
         self._settings = (float(self.tol), float(self.fscale), float(self.unit),
                           float(self.tol_disp), int(self.max_iter), float(SETTLE_FACTOR),
@@ -178,7 +181,7 @@ class _Mgdc:
             if self.step_prev is not None:
                 # orient the predictor along the previous step (passes limit points, where the
                 # tangent K^-1 P reverses, without being fooled by fast-rotating tangents)
-                self.sign = 1.0 if float(self.uP @ self.step_prev) >= 0.0 else -1.0
+                self.sign = self._orientation(self.uP, self.step_prev)
             trial = self._step()
             if trial == "rescued":
                 continue
@@ -353,9 +356,21 @@ class _Mgdc:
             flex = self.node_component(uP)
             step = system.reduced(q_try) - system.reduced(self.q)
             self._trial = (q_try, step, flex)  # what `_accept` needs of the same state
+        orient = self._orientation(uP, step)
+        negd = held_count(system.negative_eigenvalues, flex)
+        self._trial = (q_try, step, flex, orient, negd)
+        return self.monitor.suspicious(negd, orient * (1.0 if flex >= 0.0 else -1.0))
+
+    def _orientation(self, uP, step):
+        """+1 or -1: the sign of u_P . step (the direction of travel along +-u_P), remembered
+        for the same pair of arrays (the crossing test, the new state and the next predictor
+        ask it of the same tangent and step)."""
+        last = self._orient
+        if last is not None and last[0] is uP and last[1] is step:
+            return last[2]
         orient = 1.0 if float(uP @ step) >= 0.0 else -1.0
-        return self.monitor.suspicious(held_count(system.negative_eigenvalues, flex),
-                                       orient * (1.0 if flex >= 0.0 else -1.0))
+        self._orient = (uP, step, orient)
+        return orient
 
     def _rescue(self):
         """The steps underflowed: the rig moves the push on (`steps.rig_rescue`), if it may.
@@ -398,11 +413,12 @@ class _Mgdc:
         # Schur complement: dF/dd of the pushed node is 1 / (n . u_P); a negative one
         # accounts for one negative eigenvalue that holding the displacement removes.
         flex = trial[2] if seen else self.node_component(self.uP)
-        negd = held_count(neg, flex)
+        known = seen and len(trial) == 5  # (the crossing test's counts of this state)
+        negd = trial[4] if known else held_count(neg, flex)
         energy, iterations = system.energy, it
         if monitor is not None:
             # direction of travel at the new state: along +-u_P, oriented like the last step
-            orient = 1.0 if float(self.uP @ self.step_prev) >= 0.0 else -1.0
+            orient = self._orientation(self.uP, self.step_prev)
             new = PathState(self.q.copy(), self.lam, self.d, neg, negd, orient,
                             orient * (1.0 if flex >= 0.0 else -1.0), energy)
             reroute = self._observe(new)

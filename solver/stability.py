@@ -96,21 +96,26 @@ def held_count(negative_force: int, flexibility: float) -> int:
 
 
 def state_stability(structure, positions, node, direction=(0.0, -1.0),
-                    system=None) -> StateStability:
+                    system=None, factorised=False) -> StateStability:
     """Stability of the equilibrium ``positions`` (n_nodes, dim) m or full state vector of
     ``structure`` with a
     load on ``node`` along ``direction``: counts under force and displacement control.
 
     The state need not be solved here; it should be an equilibrium for the counts to mean
-    stability. ``system``: the structure's `reduced_system()` to reuse (several states).
-    Raises ValueError when K is singular (a critical state)."""
+    stability. ``system``: the structure's `reduced_system()` to reuse (several states);
+    ``factorised``: it holds K assembled and factorised at this very state already (the
+    system of the Newton that converged there, `solver.equilibrium`'s info["system"]): the
+    same counts without a second assembly. Raises ValueError when K is singular (a
+    critical state)."""
     length, fscale = structure.scales()
     control = make_control(structure, node, direction, 1e-3 * length, "mgdc")
     if system is None:
-        system = structure.reduced_system()
-    system.evaluate(state_from(structure, positions))
-    if not system.factor():
-        raise ValueError("the tangent stiffness is singular at this state (a critical point)")
+        system, factorised = structure.reduced_system(), False
+    if not factorised:
+        system.evaluate(state_from(structure, positions))
+        if not system.factor():
+            raise ValueError("the tangent stiffness is singular at this state (a critical "
+                             "point)")
     P = load_vector(system, control) * load_unit(fscale)  # exact scaling: no underflow
     flexibility = float(P @ system.solve(P))
     neg = system.negative_eigenvalues

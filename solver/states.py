@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import scipy.optimize
+from numba import njit
 
 from snapmorph.solver.newton import TOL_DISP, newton
 from snapmorph.solver.problem import ConvergenceError, make_control, state_from
@@ -255,12 +256,34 @@ def hermite(d0, d1, q0, q1, r0, r1, x):
     its slopes dq/dd there (r0, r1): off by O((d1 - d0)^4) on a smooth branch; None where a
     slope is None or not finite (or d0 = d1)."""
     h = float(d1) - float(d0)
-    if h == 0.0 or r0 is None or r1 is None or not math.isfinite(float(np.sum(r0) + np.sum(r1))):
+    if h == 0.0 or r0 is None or r1 is None:
         return None
     t = (float(x) - float(d0)) / h
     h00, h01 = (1.0 + 2.0 * t) * (1.0 - t) ** 2, t * t * (3.0 - 2.0 * t)
     h10, h11 = t * (1.0 - t) ** 2 * h, t * t * (t - 1.0) * h
-    return h00 * q0 + h10 * r0 + h01 * q1 + h11 * r1
+    q0, q1, r0, r1 = (np.asarray(v, dtype=float) for v in (q0, q1, r0, r1))
+    if not q0.shape == q1.shape == r0.shape == r1.shape:
+        if not math.isfinite(float(np.sum(r0) + np.sum(r1))):
+            return None
+        return h00 * q0 + h10 * r0 + h01 * q1 + h11 * r1
+    out = np.empty(q0.shape)
+    flat = [np.ascontiguousarray(v).reshape(-1) for v in (q0, r0, q1, r1)]
+    if not _combine4(*flat, h00, h10, h01, h11, out.reshape(-1)):
+        return None
+    return out
+
+
+@njit(cache=True)
+def _combine4(a, b, c, e, wa, wb, wc, we, out):
+    """out = wa a + wb b + wc c + we e, term by term in that order (the bits of the same
+    numpy expression, without its three temporaries); False (out unfinished) where b or e
+    holds a value that is not finite (a slope not known)."""
+    for i in range(b.shape[0]):
+        if not (abs(b[i]) < np.inf and abs(e[i]) < np.inf):
+            return False
+    for i in range(a.shape[0]):
+        out[i] = wa * a[i] + wb * b[i] + wc * c[i] + we * e[i]
+    return True
 
 
 def _on_parabola(ds, values, x):

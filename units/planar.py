@@ -340,6 +340,7 @@ class _PlanarPush:
         self.limit = limit  # m, the geometric limit the push may go on to (`push_limit`)
         self.X = self.st.reference_positions
         self.probe = self.system = self.counts = None
+        self._solved = []  # (positions, system factorised there) of the last unloaded solves
 
     def push(self, stop):
         st = self.st
@@ -464,10 +465,16 @@ class _PlanarPush:
         return float(self.X[apex, 1] - positions[apex, 1])
 
     def solve_unloaded(self, guess):
-        pos, _ = self.st.solve_equilibrium(guess, node=None)
+        pos, info = self.st.solve_equilibrium(guess, node=None)
+        # its Newton's system holds K factorised at the state: `stability` reads it there
+        self._solved.append((pos, info["system"]))
+        del self._solved[:-2]  # (states (ii) and (iii))
         return pos, pos
 
     def stability(self, positions):
+        for pos, system in self._solved:
+            if pos is positions:
+                return _state_stability(self.st, self.model, positions, system, True)
         return _state_stability(self.st, self.model, positions, self.system)
 
     def checkpoint(self, stage):
@@ -707,11 +714,13 @@ def _snap_back(result, g, model, released, steps, deadline):
     result.F_back, result.stiffness_released = F_back, k
 
 
-def _state_stability(st, model, positions, system):
+def _state_stability(st, model, positions, system, factorised=False):
     """Negative-eigenvalue counts of a state with the apex loaded (force control) and held
-    (displacement control); None when the state is exactly critical."""
+    (displacement control); None when the state is exactly critical. ``factorised``: the
+    system holds K factorised at the state already (`state_stability`)."""
     try:
-        return state_stability(st, positions, model.apex, DOWN, system=system)
+        return state_stability(st, positions, model.apex, DOWN, system=system,
+                               factorised=factorised)
     except ValueError:
         return None
 
