@@ -10,6 +10,8 @@ system a driver works on with its load vector and load unit. SI units throughout
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
@@ -374,4 +376,6 @@ def load_unit(fscale):
     lam = F / this, so that the tangent K^-1 P is of the structure's size whatever E is
     (no overflow or underflow for E = 1e200 or 1e-200), and scaling by a power of two is
     exact: the path does not depend on it."""
+    if 0.0 < fscale < math.inf:  # (scalar math: the same power, a tenth of the time)
+        return float(2.0 ** round(math.log2(fscale)))
     return float(2.0 ** np.round(np.log2(fscale)))

@@ -554,9 +554,8 @@ class Structure(ConstrainedStructure):
         released and snap-back variants, has the same graph and held components)."""
         rep, fixed = self._held(extra_fixed)
         fixed = np.ascontiguousarray(fixed, dtype=np.bool_)
-        conns = tuple(np.ascontiguousarray(elements[i], dtype=np.int64) for i in (0, 2, 4))
-        key = (rep.tobytes(), fixed.tobytes(),
-               *(c.tobytes() + bytes(str(c.shape), "ascii") for c in conns))
+        conns, graph = self._connectivity(elements)
+        key = (rep.tobytes(), fixed.tobytes(), graph)
         for k, built in _LAYOUT_MEMO:
             if k == key:
                 return built
@@ -564,6 +563,18 @@ class Structure(ConstrainedStructure):
         _LAYOUT_MEMO.append((key, built))
         del _LAYOUT_MEMO[:-_LAYOUT_MEMO_SIZE]
         return built
+
+    def _connectivity(self, elements):
+        """(the node index arrays of the three element kinds, their bytes): taken once per
+        set of elements (kept with their orderings, `_ordering`: a structure's copies share
+        them)."""
+        memo = self._orderings[1]
+        got = memo.get("connectivity")
+        if got is None:
+            conns = tuple(np.ascontiguousarray(elements[i], dtype=np.int64) for i in (0, 2, 4))
+            got = memo["connectivity"] = (conns, b"".join(
+                c.tobytes() + bytes(str(c.shape), "ascii") for c in conns))
+        return got
 
     @staticmethod
     def _new_ordering(rep, fixed, conns):

@@ -407,6 +407,7 @@ def build_unit(
     s1 = int(base.nodes[int(np.argmin(np.abs(base_x - (L - sup))))])
     base_mid = int(base.nodes[int(np.argmin(np.abs(base_x - 0.5 * L)))])
     st.elements()  # built once, shared by the variants (`UnitModel.variant`)
+    st.scales()  # (likewise: every variant's drivers and probes ask for them)
     return _rigged(st, arch.nodes.copy(), base.nodes.copy(), apex, (s0, s1), base_mid,
                    tuple(joint), actuator, supports)
 

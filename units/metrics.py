@@ -70,18 +70,21 @@ def _surface_strain(P, X, t_node, out):
         scale[i] = 0.5 * t_node[i] / (0.5 * (rest[i - 1] + rest[i]))
     for k in range(P.shape[0]):
         eps_prev = 0.0
+        a0 = b0 = r0 = 0.0
         for i in range(n - 1):
-            ex, ez = P[k, i + 1, 0] - P[k, i, 0], P[k, i + 1, 1] - P[k, i, 1]
-            eps = np.sqrt(ex * ex + ez * ez) / rest[i] - 1.0
+            a1, b1 = P[k, i + 1, 0] - P[k, i, 0], P[k, i + 1, 1] - P[k, i, 1]
+            r1 = np.sqrt(a1 * a1 + b1 * b1)
+            eps = r1 / rest[i] - 1.0
             if i == 0:
                 out[k, 0] = abs(eps)
             else:
-                for a in range(3):
-                    for c in range(2):
-                        here[2 * a + c] = P[k, i - 1 + a, c]
-                dkappa = turning_curvature(here) - made[i]
+                # `turning_curvature` of nodes i-1, i, i+1 from the edges' lengths taken
+                # once (the same operations: its bits, a third of its square roots)
+                g = r0 * r1 + a0 * a1 + b0 * b1
+                dkappa = 2.0 * (a0 * b1 - b0 * a1) / g - made[i]
                 out[k, i] = abs(0.5 * (eps_prev + eps)) + abs(dkappa) * scale[i]
             eps_prev = eps
+            a0, b0, r0 = a1, b1, r1
         out[k, n - 1] = abs(eps_prev)
 
 
