@@ -275,3 +275,30 @@ def test_a_new_orderings_layout_is_what_the_separate_kernels_give():
                 assert envelope_flops(heights) == 0.5 * float(np.dot(heights.astype(float),
                                                                      heights.astype(float)))
                 assert not any(a.flags.writeable for a in (dof_map, *dofs, heights, *slots, rep))
+
+
+def test_orderings_are_shared_across_structures_of_one_graph_and_supports():
+    """Two units meshed alike (another thickness and modulus: the same graph and supports)
+    share one DOF ordering and layout (remembered by their inputs' bytes), equal to what a
+    fresh ordering gives; other held components get their own."""
+    from snapmorph.solver import structure as structure_module
+    from snapmorph.units import UnitGeometry
+    from snapmorph.units.geometry import build_unit
+
+    a = build_unit(UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3), nodes=61).structure
+    b = build_unit(UnitGeometry(L=0.1, h=0.02, t=0.6e-3, w=5e-3, b=5e-3, E=3e9), nodes=61).structure
+    sa, sb = a.reduced_system(), b.reduced_system()
+    assert np.shares_memory(sb.dof_map, sa.dof_map)
+    assert sb.heights is sa.heights and sb.slots[1] is sa.slots[1] and sb.dofs[0] is sa.dofs[0]
+    held = a.reduced_system(extra_fixed=[(5, 0)])
+    assert not np.shares_memory(held.dof_map, sa.dof_map) and held.n == sa.n - 1
+    # what a fresh computation (no memory) gives, array for array
+    structure_module._LAYOUT_MEMO.clear()
+    fresh = b.copy()
+    fresh._orderings = None
+    sf = fresh.reduced_system()
+    assert not np.shares_memory(sf.dof_map, sb.dof_map)
+    for x, y in ((sf.dof_map, sb.dof_map), (sf.heights, sb.heights), *zip(sf.dofs, sb.dofs),
+                 *zip(sf.slots, sb.slots), (sf.representative, sb.representative)):
+        np.testing.assert_array_equal(x, y)
+    assert not sa.dof_map.flags.writeable

@@ -288,3 +288,25 @@ def test_displacement_probe_marches_in_substeps_when_newton_fails():
                                   tol_d=2e-3 * (d[i + 1] - d[i - 1]))
         found.append(F_max)
     assert abs(found[0] / found[1] - 1) < 1e-6, found
+
+
+def test_state_stability_read_off_the_newton_that_converged_there():
+    """`state_stability(..., factorised=True)` on the system an equilibrium's Newton converged
+    with (info["system"]) gives the counts of a fresh assembly at the state."""
+    from snapmorph.solver.stability import state_stability
+    from snapmorph.units import UnitGeometry, simulate_unit
+    from snapmorph.units.geometry import build_unit
+
+    g = UnitGeometry(L=0.1, h=0.02, t=0.5e-3, w=5e-3, b=5e-3)
+    r = simulate_unit(g, nodes=61)
+    m = build_unit(g, nodes=61)
+    st = m.structure
+    for k in ("ii", "iii"):
+        pos = np.zeros((st.n_nodes, 2))
+        pos[m.arch_nodes], pos[m.base_nodes] = r.shapes[k]["arch"], r.shapes[k]["base"]
+        solved, info = st.solve_equilibrium(pos, node=None)
+        read = state_stability(st, solved, m.apex, system=info["system"], factorised=True)
+        fresh = state_stability(st, solved, m.apex)
+        assert read == fresh
+        assert (read.negative_force, read.negative_displacement) == \
+            ((1, 0) if k == "ii" else (0, 0))

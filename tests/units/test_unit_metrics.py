@@ -182,3 +182,21 @@ def test_the_metrics_scale_with_E_and_L(off_grid):
     assert r2.stiffness_released == pytest.approx(r.stiffness_released * force / k, rel=1e-12)
     assert r2.strain_max == pytest.approx(r.strain_max, rel=1e-12)
     assert r2.strain_where == r.strain_where
+
+
+def test_the_strain_searchs_state_strain_is_largest_strains_value(off_grid):
+    """The strain search reads each solve's largest strain with the rods' stress-free data
+    taken once (`_StateStrain`): the value of `largest_strain`, bit for bit, on the path's
+    special states and the released one."""
+    from snapmorph.units.metrics import _StateStrain, largest_strain
+
+    g, r = off_grid
+    m = build_unit(g)
+    X = m.structure.reference_positions
+    rods = {"arch": m.arch_nodes, "base": m.base_nodes}
+    read = _StateStrain(X, rods, g.t)
+    shapes = [r.shapes[k] for k in ("i", "ii", "iii")]
+    shapes.append({"arch": r.released["arch"], "base": r.released["base_shape"]})
+    for sh in shapes:
+        pos = _full_positions(m, {"arch": sh["arch"], "base": sh["base"]})
+        assert read(pos) == largest_strain(pos, X, rods, g.t)[0]
