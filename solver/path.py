@@ -127,7 +127,7 @@ class Recorder:
         st, rows = self.structure, self.rows
         rows["d"].append(d)
         rows["F"].append(F * self.force_unit)
-        rows["q"].append(np.array(st.positions_of(q), dtype=float, copy=True))
+        rows["q"].append(np.asarray(st.positions_of(q), dtype=float).copy())
         rows["E"].append(E * self.force_unit)
         rows["it"].append(it)
         rows["neg"].append(neg)

@@ -168,6 +168,8 @@ def second_state_passed(rows) -> bool:
     # (ii) and (iii) need F below zero and then not below it again: a path whose samples
     # have all stayed below zero since the first one that went there has no crossing
     # after (ii) (cheap first: the test runs at every state)
+    if not min(F) < 0.0:  # (C-speed first: most states of a push are above zero)
+        return False
     below = next((i for i, f in enumerate(F) if f < 0.0), None)
     if below is None or all(f < 0.0 for f in F[below:]):
         return False
