@@ -146,8 +146,8 @@ class _Mgdc:
         self.total_iterations = 0
         self.travelled = 0.0  # sum of |dd| along the path, m (wandering guard)
         self.arc = 0.0  # the path's length so far in the step norm (reduced DOFs), m
-        # (q_try, its reduced step, its flexibility[, orientation, held count]) of the trial
-        # state, as `_crosses` and `_accept` need them (computed once a step)
+        # (q_try, its reduced step, its flexibility[, held count]) of the trial state, as
+        # `_crosses` and `_accept` need them (computed once a step)
         self._trial = None
         self._orient = None  # (u_P, step, sign of u_P . step) last computed, for `run`
         # a whole step in one compiled call where the system has it (`System.mgdc_step`)
@@ -355,10 +355,9 @@ class _Mgdc:
         else:
             flex = self.node_component(uP)
             step = system.reduced(q_try) - system.reduced(self.q)
-            self._trial = (q_try, step, flex)  # what `_accept` needs of the same state
         orient = self._orientation(uP, step)
         negd = held_count(system.negative_eigenvalues, flex)
-        self._trial = (q_try, step, flex, orient, negd)
+        self._trial = (q_try, step, flex, negd)  # what `_accept` needs of the same state
         return self.monitor.suspicious(negd, orient * (1.0 if flex >= 0.0 else -1.0))
 
     def _orientation(self, uP, step):
@@ -413,8 +412,8 @@ class _Mgdc:
         # Schur complement: dF/dd of the pushed node is 1 / (n . u_P); a negative one
         # accounts for one negative eigenvalue that holding the displacement removes.
         flex = trial[2] if seen else self.node_component(self.uP)
-        known = seen and len(trial) == 5  # (the crossing test's counts of this state)
-        negd = trial[4] if known else held_count(neg, flex)
+        known = seen and len(trial) == 4  # (the crossing test's count of this state)
+        negd = trial[3] if known else held_count(neg, flex)
         energy, iterations = system.energy, it
         if monitor is not None:
             # direction of travel at the new state: along +-u_P, oriented like the last step

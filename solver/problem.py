@@ -11,7 +11,6 @@ system a driver works on with its load vector and load unit. SI units throughout
 from __future__ import annotations
 
 import math
-
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
