@@ -125,9 +125,7 @@ def turning_jet_edges(a0, b0, t0, a1, b1, t1):
     their `edge_turn` ``t0``, ``t1``."""
     s0, r0, q0x, q0z, w0, y0 = t0
     s1, r1, p1x, p1z, u1, v1 = t1
-    # kappa = 2 f / g, f = e0 x e1, g = |e0||e1| + e0 . e1 (as `turning_curvature`)
-    g = r0 * r1 + a0 * a1 + b0 * b1
-    kappa = 2.0 * (a0 * b1 - b0 * a1) / g
+    kappa = edge_turning(a0, b0, r0, a1, b1, r1)
     k1 = 1.0 + 0.25 * kappa * kappa
     k2 = 0.5 * kappa * k1
     # d(phi)/de0 = -d(theta0)/de0 = (b0, -a0)/|e0|^2, d(phi)/de1 = d(theta1)/de1; so
@@ -326,8 +324,15 @@ def turning_curvature(x):
     b0 = x[3] - x[1]
     a1 = x[4] - x[2]
     b1 = x[5] - x[3]
-    g = np.sqrt(a0 * a0 + b0 * b0) * np.sqrt(a1 * a1 + b1 * b1) + a0 * a1 + b0 * b1
-    return 2.0 * (a0 * b1 - b0 * a1) / g
+    return edge_turning(a0, b0, np.sqrt(a0 * a0 + b0 * b0), a1, b1, np.sqrt(a1 * a1 + b1 * b1))
+
+
+@njit(cache=True, inline="always")
+def edge_turning(a0, b0, r0, a1, b1, r1):
+    """2 tan(phi/2) = 2 f / g of the turn from the edge e0 = (a0, b0) to e1 = (a1, b1) of
+    lengths r0, r1: f = e0 x e1, g = |e0||e1| + e0 . e1 (the one formula of the bending
+    energy, its derivatives' jet and the surface strain)."""
+    return 2.0 * (a0 * b1 - b0 * a1) / (r0 * r1 + a0 * a1 + b0 * b1)
 
 
 @njit(cache=True, inline="always")

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from snapmorph.solver.energies import turning_curvature
+from snapmorph.solver.energies import edge_turning, turning_curvature
 from snapmorph.solver.problem import ConvergenceError, load_unit, load_vector, make_control, state_from
 
 NAN = float("nan")
@@ -79,9 +79,8 @@ def _surface_strain(P, X, t_node, out):
                 out[k, 0] = abs(eps)
             else:
                 # `turning_curvature` of nodes i-1, i, i+1 from the edges' lengths taken
-                # once (the same operations: its bits, a third of its square roots)
-                g = r0 * r1 + a0 * a1 + b0 * b1
-                dkappa = 2.0 * (a0 * b1 - b0 * a1) / g - made[i]
+                # once (its bits, a third of its square roots)
+                dkappa = edge_turning(a0, b0, r0, a1, b1, r1) - made[i]
                 out[k, i] = abs(0.5 * (eps_prev + eps)) + abs(dkappa) * scale[i]
             eps_prev = eps
             a0, b0, r0 = a1, b1, r1

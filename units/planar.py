@@ -691,9 +691,6 @@ def _snap_back(result, g, model, released, steps, deadline):
     snap_back`): the unit without its actuator on the rollers, its base middle held in x."""
     back = model.variant(actuator=False)
     back.structure.fix(back.base_mid, "x")
-    # (the tangent predictor at the drivers' tolerance: with the main push's second-order
-    # predictor and looser tolerance the push takes 8 % fewer iterations, but its samples
-    # change, and where d turns back at the force peak the peak search depends on them)
     # the main push's predictor and path tolerance (the peak is solved again exactly), and
     # its search as fine in d as with 60 steps (`PEAK_TOL`): 8 % fewer iterations than the
     # tangent at the drivers' tolerance with its own search (whose bracket was 2e-3 of the

@@ -163,15 +163,14 @@ def second_state_passed(rows) -> bool:
     """The push's stop test: the path has passed a candidate (iii) (`snap_crossings`, with
     the rows' force-control counts ``rows["neg_force"]`` when the model gives them)."""
     F = rows["F"]
-    if len(F) < 3:
-        return False
     # (ii) and (iii) need F below zero and then not below it again: a path whose samples
     # have all stayed below zero since the first one that went there has no crossing
-    # after (ii) (cheap first: the test runs at every state)
-    if not min(F) < 0.0:  # (C-speed first: most states of a push are above zero)
+    # after (ii) (cheap tests first, at C speed where they can be: the test runs at every
+    # state, and most states of a push are above zero)
+    if len(F) < 3 or not min(F) < 0.0:
         return False
-    below = next((i for i, f in enumerate(F) if f < 0.0), None)
-    if below is None or all(f < 0.0 for f in F[below:]):
+    below = next(i for i, f in enumerate(F) if f < 0.0)  # (there is one: min(F) < 0)
+    if all(f < 0.0 for f in F[below:]):
         return False
     return snap_crossings(rows["d"], F, rows.get("neg_force"))[2] is not None
 
